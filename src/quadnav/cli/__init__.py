@@ -1,0 +1,1 @@
+"""The ``quadnav`` command line: a thin layer over the library."""

@@ -1,0 +1,79 @@
+"""Arguments shared by several commands: MAP, --margin, --start/--goal."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from quadnav.world import World, read_start_goal
+from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
+
+
+def finite_float(text: str) -> float:
+    """argparse type: a finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def margin_value(text: str) -> float:
+    """argparse type: a margin in metres, >= 0."""
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a margin >= 0 m, got {text!r}")
+    return value
+
+
+def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
+    """MAP: a map file or a built-in world spec (optional: defaults to the built-in world)."""
+    help_text = "map file (.txt or .json) or built-in world spec, e.g. forest:seed=3"
+    if optional:
+        parser.add_argument("map", nargs="?", default=DEFAULT_WORLD_SPEC, metavar="MAP",
+                            help=f"{help_text} (default: {DEFAULT_WORLD_SPEC})")
+    else:
+        parser.add_argument("map", metavar="MAP", help=help_text)
+
+
+def add_margin_argument(parser: argparse.ArgumentParser) -> None:
+    """--margin M, defaulting to the map's own margin or DEFAULT_MARGIN."""
+    parser.add_argument("--margin", type=margin_value, metavar="M",
+                        help="safety margin in metres (default: the map's own, "
+                             f"else {DEFAULT_MARGIN:g})")
+
+
+def add_start_goal_arguments(parser: argparse.ArgumentParser) -> None:
+    """--start X Y Z, --goal X Y Z and --start-goal FILE."""
+    parser.add_argument("--start", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
+                        help="start position in metres (default: the map's own)")
+    parser.add_argument("--goal", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
+                        help="goal position in metres (default: the map's own)")
+    parser.add_argument("--start-goal", metavar="FILE",
+                        help="RBE595 start/goal file with lines 'start: (x, y, z)', "
+                             "'goal: (x, y, z)'")
+
+
+def resolve_margin(args: argparse.Namespace, world: World) -> float:
+    """The margin flag, else the map's own margin, else DEFAULT_MARGIN."""
+    if args.margin is not None:
+        return args.margin
+    return world.margin if world.margin is not None else DEFAULT_MARGIN
+
+
+def resolve_start_goal(args: argparse.Namespace, world: World
+                       ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Start and goal from the flags, else the start/goal file, else the map."""
+    start, goal = world.start, world.goal
+    if args.start_goal is not None:
+        start, goal = read_start_goal(args.start_goal)
+    if args.start is not None:
+        start = np.array(args.start)
+    if args.goal is not None:
+        goal = np.array(args.goal)
+    return start, goal
+

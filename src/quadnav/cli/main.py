@@ -1,0 +1,61 @@
+"""Entry point of the ``quadnav`` command.
+
+Exit codes: 0 success; 2 bad input (a malformed map, a bad flag, a point in a block),
+reported as one line on stderr with no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Sequence
+
+from quadnav import __version__
+from quadnav.cli.map_commands import add_map_commands
+from quadnav.cli.worlds_command import add_worlds_command
+from quadnav.errors import QuadnavError
+
+EXIT_USAGE = 2
+
+
+class _OneLineErrorParser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors are one line on stderr, exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full ``quadnav`` argument parser."""
+    parser = _OneLineErrorParser(
+        prog="quadnav",
+        description="Plan, smooth, fly and show quadrotor flights through 3D maps of boxes.",
+    )
+    parser.add_argument("--version", action="version", version=f"quadnav {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    add_map_commands(commands)
+    add_worlds_command(commands)
+    return parser
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"quadnav: warning: {message}", file=sys.stderr)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code (also used by the console script)."""
+    args = build_parser().parse_args(argv)
+    warnings.showwarning = _one_line_warning
+    try:
+        return args.handler(args)
+    except QuadnavError as error:
+        print(f"quadnav: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("quadnav: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

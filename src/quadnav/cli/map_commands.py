@@ -1,0 +1,117 @@
+"""``quadnav map info|check|show|convert``."""
+
+from __future__ import annotations
+
+import argparse
+
+from quadnav.cli.args import (
+    add_map_argument,
+    add_margin_argument,
+    add_start_goal_arguments,
+    resolve_margin,
+    resolve_start_goal,
+)
+from quadnav.errors import QuadnavError
+from quadnav.world import load_world, write_map
+from quadnav.world.placement import classify_point, format_point
+
+
+def info(args: argparse.Namespace) -> int:
+    """Print bounds, block count, free-volume fraction, and start/goal/margin if present."""
+    world = load_world(args.map)
+    lower, upper = world.lower, world.upper
+    print(f"map:         {world.name}")
+    print("bounds:      " + ", ".join(f"{a} {lower[i]:g} .. {upper[i]:g}"
+                                      for i, a in enumerate("xyz")) + " m")
+    print("size:        " + " x ".join(f"{e:g}" for e in world.extent) + " m")
+    print(f"blocks:      {len(world)}")
+    print(f"free volume: {100 * world.free_volume_fraction():.2f} %")
+    for label, point in (("start", world.start), ("goal", world.goal)):
+        if point is not None:
+            print(f"{label + ':':<12} {format_point(point)}")
+    if world.margin is not None:
+        print(f"margin:      {world.margin:g} m")
+    return 0
+
+
+def check(args: argparse.Namespace) -> int:
+    """Say where start and goal lie; exit 2 if one is in a block or outside the boundary."""
+    world = load_world(args.map)
+    margin = resolve_margin(args, world)
+    start, goal = resolve_start_goal(args, world)
+    points = [(label, p) for label, p in (("start", start), ("goal", goal)) if p is not None]
+    if not points:
+        raise QuadnavError(f"{world.name}: the map has no start or goal; "
+                           "pass --start X Y Z and/or --goal X Y Z")
+    reports = [classify_point(world, point, margin, label) for label, point in points]
+    print(f"{world.name}: margin {margin:g} m")
+    for report in reports:
+        print(report)
+    bad = [r for r in reports if not r.usable]
+    if bad:
+        names = " and ".join(f"{r.label} {format_point(r.point)} is {r.placement.value}"
+                             for r in bad)
+        raise QuadnavError(f"{world.name}: {names}; expected points inside the boundary "
+                           "and outside every block")
+    return 0
+
+
+def show(args: argparse.Namespace) -> int:
+    """Write a 3D figure of the map with start (red) and goal (green)."""
+    from quadnav.viz.figures import check_figure_path, save_figure
+    from quadnav.viz.map3d import world_figure
+
+    check_figure_path(args.output)
+    world = load_world(args.map)
+    start, goal = resolve_start_goal(args, world)
+    save_figure(world_figure(world, start, goal), args.output)
+    print(f"wrote {args.output}")
+    return 0
+
+
+def convert(args: argparse.Namespace) -> int:
+    """Write a map in the format named by the output's extension (.json, else text)."""
+    world = load_world(args.input)
+    write_map(world, args.output)
+    print(f"wrote {args.output} ({len(world)} blocks)")
+    return 0
+
+
+def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav map ...`` on the top-level subparsers."""
+    parser = subparsers.add_parser("map", help="inspect, check, draw and convert maps",
+                                   description="Inspect, check, draw and convert maps.")
+    commands = parser.add_subparsers(dest="map_command", metavar="COMMAND", required=True)
+
+    p = commands.add_parser("info", help="bounds, block count, free volume, start/goal",
+                            description="Print a map's bounds, block count, free-volume "
+                                        "fraction and, if it has them, start, goal and margin.")
+    add_map_argument(p)
+    p.set_defaults(handler=info)
+
+    p = commands.add_parser("check", help="where start and goal lie",
+                            description="Say whether start and goal lie in free space, inside "
+                                        "the safety margin, inside a block (which one) or "
+                                        "outside the boundary. Exit 2 if either is unusable.")
+    add_map_argument(p)
+    add_margin_argument(p)
+    add_start_goal_arguments(p)
+    p.set_defaults(handler=check)
+
+    p = commands.add_parser("show", help="draw the map in 3D",
+                            description="Draw the map in 3D: blocks in their colours, the "
+                                        "boundary transparent, start red, goal green.")
+    add_map_argument(p, optional=True)
+    add_start_goal_arguments(p)
+    p.add_argument("-o", "--output", default="map.png", metavar="FILE",
+                   help="image to write (.png, .pdf, .svg; default: map.png)")
+    p.set_defaults(handler=show)
+
+    p = commands.add_parser("convert", help="text <-> JSON",
+                            description="Convert a map between the text and JSON formats; the "
+                                        "output's extension picks the format (.json, else "
+                                        "text). IN may be a built-in world spec.")
+    p.add_argument("input", metavar="IN", help="map file or built-in world spec")
+    p.add_argument("output", metavar="OUT", help="file to write (.json or .txt)")
+    p.set_defaults(handler=convert)
+

@@ -1,0 +1,31 @@
+"""Error types that carry a message meant for the user.
+
+Every error a user can cause (a bad map file, a bad built-in world spec, a start
+inside a block) derives from :class:`QuadnavError`; the CLI prints its message on
+one line and exits with code 2.
+"""
+
+from __future__ import annotations
+
+
+class QuadnavError(Exception):
+    """An error caused by the user's input; its message is one line for the user."""
+
+
+class MapError(QuadnavError):
+    """A map file or built-in world spec that cannot be read.
+
+    The message names the source (a file path or a spec) and, where there is one,
+    the 1-based line number, then says what was expected.
+    """
+
+    def __init__(self, source: str, message: str, line: int | None = None) -> None:
+        self.source = str(source)
+        self.line = line
+        self.reason = message
+        where = self.source if line is None else f"{self.source}:{line}"
+        super().__init__(f"{where}: {message}")
+
+
+class MapWarning(UserWarning):
+    """Something in a map was repaired while reading it (a block clipped or dropped)."""

@@ -1,0 +1,154 @@
+"""Built-in worlds, generated from a spec such as ``forest:size=50x50x8,density=0.05,seed=3``.
+
+A spec is a world name, optionally followed by ``:`` and ``key=value`` pairs joined by
+commas; left-out keys take their defaults. Building is deterministic: the same spec gives
+the same world. Every built world
+
+* is named by its canonical spec, which lists every parameter (``world.name``), so
+  ``build_world(world.name)`` rebuilds it;
+* has ``margin`` :data:`DEFAULT_MARGIN` and a start and goal that are free in the world
+  inflated by that margin;
+* is proven connected there (:func:`quadnav.world.connectivity.connected`). A layout
+  that fails the check is drawn again from a random generator seeded with
+  ``(seed, attempt)``, up to :data:`MAX_ATTEMPTS` times, before giving up with a
+  :class:`~quadnav.errors.MapError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from quadnav.errors import MapError
+from quadnav.world.builtin import empty, forest, maze, window
+from quadnav.world.builtin.base import Generator, Layout
+from quadnav.world.builtin.params import SpecError, format_values, parse_values
+from quadnav.world.connectivity import connected, default_resolution
+from quadnav.world.model import World
+
+__all__ = [
+    "DEFAULT_MARGIN",
+    "DEFAULT_WORLD_SPEC",
+    "ParamInfo",
+    "WorldInfo",
+    "build_world",
+    "describe_worlds",
+    "is_builtin_spec",
+    "world_names",
+]
+
+#: Safety margin, metres, that built-in worlds recommend and are proven flyable with.
+DEFAULT_MARGIN = 0.2
+#: The world flown or shown when no MAP is given.
+DEFAULT_WORLD_SPEC = "forest"
+#: Layouts drawn for one spec before giving up on finding a connected one.
+MAX_ATTEMPTS = 20
+
+_GENERATORS: dict[str, Generator] = {
+    g.name: g for g in (empty.GENERATOR, forest.GENERATOR, window.GENERATOR, maze.GENERATOR)
+}
+
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """A parameter as ``quadnav worlds`` shows it; every field is display text.
+
+    Attributes:
+        name: the key in a spec, e.g. ``size``.
+        type: ``int``, ``float``, ``WxDxH`` or ``NxM``.
+        default: the default as written in a spec, e.g. ``20x20x6``.
+        help: one line, with units.
+    """
+
+    name: str
+    type: str
+    default: str
+    help: str
+
+
+@dataclass(frozen=True)
+class WorldInfo:
+    """A built-in world as ``quadnav worlds`` shows it.
+
+    Attributes:
+        name: the world's name.
+        summary: one line saying what it looks like.
+        params: its parameters, in canonical order.
+    """
+
+    name: str
+    summary: str
+    params: tuple[ParamInfo, ...]
+
+
+def world_names() -> list[str]:
+    """Names of the built-in worlds."""
+    return list(_GENERATORS)
+
+
+def describe_worlds() -> list[WorldInfo]:
+    """Every built-in world with a summary and its parameters."""
+    return [
+        WorldInfo(g.name, g.summary, tuple(
+            ParamInfo(p.name, p.kind.label, p.format(p.default), p.help) for p in g.params))
+        for g in _GENERATORS.values()
+    ]
+
+
+def is_builtin_spec(text: str) -> bool:
+    """Whether ``text`` names a built-in world (the part before any ``:``).
+
+    The parameters are not checked; a path such as ``forest.txt`` is not a spec.
+    """
+    return text.partition(":")[0].strip() in _GENERATORS
+
+
+def build_world(spec: str) -> World:
+    """The world that ``spec`` describes; MapError with a one-line reason if it is bad.
+
+    Raises MapError for an unknown world or parameter, a repeated parameter, a value of
+    the wrong type or out of range, values the generator cannot build (e.g. a density
+    too high to place the trunks), or no connected layout in :data:`MAX_ATTEMPTS` draws.
+    """
+    name, colon, rest = (part.strip() for part in spec.partition(":"))
+    generator = _GENERATORS.get(name)
+    if generator is None:
+        raise MapError(spec, f"unknown built-in world {name!r} "
+                       f"(known: {', '.join(_GENERATORS)})")
+    try:
+        defaults = {p.name: p.default for p in generator.params}
+        values = parse_values(generator.params, rest) if colon else defaults
+        canonical = f"{name}:{format_values(generator.params, values)}"
+        seed = values.get("seed", 0)
+        for attempt in range(MAX_ATTEMPTS):
+            layout = generator.layout(values, np.random.default_rng([seed, attempt]))
+            world = _world(layout, canonical)
+            if _flyable(world):
+                return world
+    except SpecError as error:
+        raise MapError(spec, str(error)) from None
+    narrow = 2 * default_resolution(layout.size) + 2 * DEFAULT_MARGIN
+    raise MapError(spec, f"no layout in {MAX_ATTEMPTS} attempts had start and goal provably "
+                   f"connected (at this map size, passages narrower than about {narrow:.2g} m "
+                   "may be missed); try fewer obstacles or a smaller map")
+
+
+def _world(layout: Layout, name: str) -> World:
+    """The World of a generated layout."""
+    return World(
+        boundary=np.concatenate([np.zeros(3), layout.size]),
+        blocks=layout.blocks,
+        colors=layout.colors,
+        start=layout.start,
+        goal=layout.goal,
+        margin=DEFAULT_MARGIN,
+        name=name,
+    )
+
+
+def _flyable(world: World) -> bool:
+    """Whether start and goal are free and provably connected at :data:`DEFAULT_MARGIN`
+    (:func:`connected` answers False for a point that is not free)."""
+    inflated = world.inflate(DEFAULT_MARGIN)
+    return connected(inflated, world.start, world.goal)

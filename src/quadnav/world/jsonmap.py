@@ -1,0 +1,146 @@
+"""The MEAM620 flightsim / rotorpy JSON map format.
+
+::
+
+    {"bounds": {"extents": [xmin, xmax, ymin, ymax, zmin, zmax]},
+     "blocks": [{"extents": [...same interleaved order...], "color": [r, g, b]}],
+     "start": [x, y, z], "goal": [x, y, z], "margin": 0.3}
+
+Extents interleave min and max per axis; colours are 0-1 and optional; ``blocks``,
+``start``, ``goal`` and ``margin`` are optional, other keys (``resolution``,
+``expected_path_length``, ``timeout``, ...) are ignored. Error messages name the line
+where the offending JSON object begins.
+"""
+
+from __future__ import annotations
+
+import json
+import json.decoder
+import json.scanner
+from typing import Any
+
+from quadnav.errors import MapError
+from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
+from quadnav.world.reading import assemble_world, check_box, check_color, check_finite
+from quadnav.world.textmap import format_number
+
+
+class _LocatedDict(dict):
+    """A JSON object that remembers the line it starts on."""
+
+    line: int
+
+
+def _decode_with_lines(text: str) -> Any:
+    """json.loads, but every object is a _LocatedDict carrying its 1-based line."""
+    decoder = json.JSONDecoder()
+
+    def parse_object(s_and_end: tuple[str, int], *args: Any) -> tuple[dict, int]:
+        obj, end = json.decoder.JSONObject(s_and_end, *args)
+        located = _LocatedDict(obj)
+        located.line = text.count("\n", 0, s_and_end[1]) + 1
+        return located, end
+
+    decoder.parse_object = parse_object  # type: ignore[assignment]
+    decoder.scan_once = json.scanner.py_make_scanner(decoder)
+    return decoder.decode(text)
+
+
+def _line(obj: Any) -> int | None:
+    return getattr(obj, "line", None)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _number(value: Any, source: str, line: int | None, what: str) -> float:
+    """``value`` as a finite float, or a MapError."""
+    if not _is_number(value):
+        raise MapError(source, f"{what}: expected a number, got {json.dumps(value)[:60]}", line)
+    try:
+        return check_finite(float(value), source, line, what)
+    except OverflowError:
+        raise MapError(source, f"{what}: number too large", line) from None
+
+
+def _numbers(value: Any, count: int, source: str, line: int | None, what: str) -> list[float]:
+    """``value`` as a list of ``count`` finite numbers, or a MapError."""
+    if not isinstance(value, list) or len(value) != count or not all(map(_is_number, value)):
+        raise MapError(source, f"{what}: expected a list of {count} numbers, got "
+                       f"{json.dumps(value)[:60]}", line)
+    return [_number(v, source, line, what) for v in value]
+
+
+def _box(obj: Any, source: str, what: str) -> list[float]:
+    """The box of ``{"extents": [xmin, xmax, ymin, ymax, zmin, zmax]}`` as min/max rows."""
+    if not isinstance(obj, dict) or "extents" not in obj:
+        raise MapError(source, f'{what}: expected an object with "extents"',
+                       _line(obj))
+    e = _numbers(obj["extents"], 6, source, _line(obj), f"{what}.extents")
+    return check_box([e[0], e[2], e[4], e[1], e[3], e[5]], source, _line(obj), what)
+
+
+def parse_json_map(text: str, source: str) -> World:
+    """Parse the text of a JSON map; raises MapError naming ``source`` and the line."""
+    if not text.strip():
+        raise MapError(source, "empty map: expected a JSON object with \"bounds\"")
+    try:
+        data = _decode_with_lines(text)
+    except json.JSONDecodeError as error:
+        raise MapError(source, f"broken JSON: {error.msg} (column {error.colno})",
+                       error.lineno) from None
+    except RecursionError:
+        raise MapError(source, "broken JSON: nested too deeply") from None
+    if not isinstance(data, dict):
+        raise MapError(source, "expected a JSON object at the top level", 1)
+    if "bounds" not in data:
+        raise MapError(source, 'missing key "bounds": expected {"bounds": {"extents": '
+                       "[xmin, xmax, ymin, ymax, zmin, zmax]}}", _line(data))
+    boundary = _box(data["bounds"], source, "bounds")
+    raw_blocks = data.get("blocks", [])
+    if not isinstance(raw_blocks, list):
+        raise MapError(source, '"blocks": expected a list of objects', _line(data))
+    blocks, colors, lines = [], [], []
+    for i, obj in enumerate(raw_blocks):
+        blocks.append(_box(obj, source, f"blocks[{i}]"))
+        rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
+                       f"blocks[{i}].color")
+        colors.append(check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color"))
+        lines.append(_line(obj))
+    extras: dict[str, Any] = {}
+    for key in ("start", "goal"):
+        if key in data:
+            extras[key] = _numbers(data[key], 3, source, _line(data), key)
+    if "margin" in data:
+        margin = _number(data["margin"], source, _line(data), "margin")
+        if margin < 0:
+            raise MapError(source, f"margin: expected a number >= 0, got {margin:g}", _line(data))
+        extras["margin"] = margin
+    return assemble_world(source, boundary, blocks, colors, lines, **extras)
+
+
+def _json_list(values: Any) -> str:
+    return "[" + ", ".join(format_number(float(v)) for v in values) + "]"
+
+
+def _interleaved(box: Any) -> str:
+    return _json_list([box[0], box[3], box[1], box[4], box[2], box[5]])
+
+
+def format_json_map(world: World) -> str:
+    """The world as a JSON map (one block per line); reading it back gives the same numbers."""
+    out = ["{", f'    "bounds": {{"extents": {_interleaved(world.boundary)}}},']
+    blocks = [f'        {{"extents": {_interleaved(box)}, "color": {_json_list(color)}}}'
+              for box, color in zip(world.blocks, world.colors, strict=True)]
+    out.append('    "blocks": [' + ("\n" + ",\n".join(blocks) + "\n    " if blocks else "") + "]")
+    for key in ("start", "goal"):
+        value = getattr(world, key)
+        if value is not None:
+            out[-1] += ","
+            out.append(f'    "{key}": {_json_list(value)}')
+    if world.margin is not None:
+        out[-1] += ","
+        out.append(f'    "margin": {format_number(world.margin)}')
+    out.append("}")
+    return "\n".join(out) + "\n"

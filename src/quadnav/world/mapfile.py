@@ -1,0 +1,82 @@
+"""Reading and writing map files, and resolving a MAP argument to a :class:`World`.
+
+A MAP is a path to a text or JSON map file, or the spec of a built-in world such as
+``forest:size=50x50x8,density=0.05,seed=3`` (see :mod:`quadnav.world.builtin`).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+from quadnav.errors import MapError
+from quadnav.world import builtin
+from quadnav.world.jsonmap import format_json_map, parse_json_map
+from quadnav.world.model import World
+from quadnav.world.reading import decode_text
+from quadnav.world.textmap import format_text_map, parse_text_map
+
+
+def _is_json(path: Path, text: str) -> bool:
+    if path.suffix.lower() == ".json":
+        return True
+    return path.suffix.lower() != ".txt" and text.lstrip().startswith("{")
+
+
+def parse_map(data: bytes, source: str) -> World:
+    """A World from the bytes of a map file in either format (JSON starts with ``{``)."""
+    text = decode_text(data, source)
+    if _is_json(Path(source), text):
+        return parse_json_map(text, source)
+    return parse_text_map(text, source)
+
+
+def read_map(path: str | Path) -> World:
+    """A World from a text or JSON map file; MapError naming the file and line if bad."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        raise MapError(str(path), f"cannot read: {error.strerror}") from None
+    return parse_map(data, str(path))
+
+
+def load_world(source: str | Path | World) -> World:
+    """A World from a map file path, a built-in world spec, or a World (returned as is)."""
+    if isinstance(source, World):
+        return source
+    path = Path(source)
+    if path.is_file():
+        return read_map(path)
+    if builtin.is_builtin_spec(str(source)):
+        return builtin.build_world(str(source))
+    raise MapError(str(source), "no such map file, and not a built-in world "
+                   f"(built-in: {', '.join(builtin.world_names())})")
+
+
+def format_map(world: World, path: str | Path) -> str:
+    """The world in the format that ``path``'s extension names (.json, else text)."""
+    if Path(path).suffix.lower() == ".json":
+        return format_json_map(world)
+    return format_text_map(world)
+
+
+def write_text_atomically(text: str, path: str | Path) -> None:
+    """Write ``text`` to ``path`` so that the file is either whole or untouched."""
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.")
+    except OSError as error:
+        raise MapError(str(path), f"cannot write: {error.strerror}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except OSError as error:
+        Path(tmp).unlink(missing_ok=True)
+        raise MapError(str(path), f"cannot write: {error.strerror}") from None
+
+
+def write_map(world: World, path: str | Path) -> None:
+    """Write the world as a map file, JSON for a ``.json`` path and text otherwise."""
+    write_text_atomically(format_map(world, path), path)

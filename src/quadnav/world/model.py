@@ -1,0 +1,249 @@
+"""The :class:`World`: a boundary box, box obstacles and, optionally, a start and goal.
+
+Geometry conventions (see :mod:`quadnav.world.geometry`): free space is open — a
+point on a block face or on the boundary is *not* free; boxes are rows
+``(xmin, ymin, zmin, xmax, ymax, zmax)`` in metres, world frame z up.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from quadnav.errors import QuadnavError
+from quadnav.world import geometry
+
+FloatArray = NDArray[np.float64]
+
+#: Colour given to blocks whose map file names none (RGB in [0, 1]).
+DEFAULT_BLOCK_COLOR = (0.6, 0.6, 0.6)
+
+
+def _frozen(values: ArrayLike, shape: tuple[int, ...], what: str) -> FloatArray:
+    """A read-only float64 copy of ``values`` with the given shape (-1 = any)."""
+    array = np.array(values, dtype=np.float64)
+    if array.size == 0 and shape[0] == -1:
+        array = array.reshape((0, *shape[1:]))
+    if array.ndim != len(shape) or any(
+            s not in (-1, n) for s, n in zip(shape, array.shape, strict=True)):
+        raise ValueError(f"{what} must have shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{what} must be finite")
+    array.flags.writeable = False
+    return array
+
+
+def _check_boxes(boxes: FloatArray, what: str) -> None:
+    if np.any(boxes[..., :3] >= boxes[..., 3:]):
+        raise ValueError(f"{what}: every min must be below its max")
+
+
+@dataclass(frozen=True, eq=False)
+class Hit:
+    """The first contact of a segment with an obstacle.
+
+    Attributes:
+        t: fraction of the way along the segment, in [0, 1].
+        point: the contact point (3,), metres.
+        block: row of the block touched, or ``None`` for the boundary.
+    """
+
+    t: float
+    point: FloatArray
+    block: int | None
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """A 3D map of box obstacles.
+
+    Attributes:
+        boundary: (6,) ``xmin, ymin, zmin, xmax, ymax, zmax`` of the flyable box, metres.
+        blocks: (N, 6) obstacle boxes in the same layout, metres.
+        colors: (N, 3) block colours, RGB in [0, 1].
+        start: (3,) default start position, or ``None``.
+        goal: (3,) default goal position, or ``None``.
+        margin: safety margin the map recommends, metres, or ``None``.
+        name: where the world came from (a file path or built-in spec), for messages.
+    """
+
+    boundary: FloatArray
+    blocks: FloatArray = field(default_factory=lambda: np.zeros((0, 6)))
+    colors: FloatArray | None = None
+    start: FloatArray | None = None
+    goal: FloatArray | None = None
+    margin: float | None = None
+    name: str = "<world>"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "boundary", _frozen(self.boundary, (6,), "boundary"))
+        _check_boxes(self.boundary, "boundary")
+        set_(self, "blocks", _frozen(self.blocks, (-1, 6), "blocks"))
+        _check_boxes(self.blocks, "blocks")
+        if self.colors is None:
+            colors = np.tile(DEFAULT_BLOCK_COLOR, (len(self.blocks), 1))
+        else:
+            colors = self.colors
+        set_(self, "colors", _frozen(colors, (len(self.blocks), 3), "colors"))
+        for name in ("start", "goal"):
+            value = getattr(self, name)
+            if value is not None:
+                set_(self, name, _frozen(value, (3,), name))
+        if self.margin is not None:
+            set_(self, "margin", float(self.margin))
+
+    # ----------------------------------------------------------------- basics
+    @property
+    def lower(self) -> FloatArray:
+        """(3,) lower corner of the boundary, metres."""
+        return self.boundary[:3]
+
+    @property
+    def upper(self) -> FloatArray:
+        """(3,) upper corner of the boundary, metres."""
+        return self.boundary[3:]
+
+    @property
+    def extent(self) -> FloatArray:
+        """(3,) size of the boundary box, metres."""
+        return self.upper - self.lower
+
+    def __len__(self) -> int:
+        return len(self.blocks)
+
+    @cached_property
+    def _blocks_by_coordinate(self) -> FloatArray:
+        """Blocks transposed to a C-contiguous (6, N) array for the kernels."""
+        return np.ascontiguousarray(self.blocks.T)
+
+    def replace(self, **changes: object) -> World:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    def inflate(self, margin: float) -> World:
+        """A new World whose blocks grow and whose boundary shrinks by ``margin`` metres.
+
+        Each block grows by ``margin`` along every axis (the Minkowski sum with a cube,
+        which contains the one with a ball), so every point within ``margin`` of an
+        obstacle or of the boundary is outside the inflated world's free space.
+        """
+        if not (np.isfinite(margin) and margin >= 0):
+            raise ValueError(f"margin must be a finite number >= 0, got {margin}")
+        grow = np.array([-margin] * 3 + [margin] * 3)
+        boundary = self.boundary - grow
+        if np.any(boundary[:3] >= boundary[3:]):
+            raise QuadnavError(
+                f"{self.name}: margin {margin:g} m leaves no free space in a boundary of size "
+                f"{' x '.join(f'{e:g}' for e in self.extent)} m"
+            )
+        return self.replace(boundary=boundary, blocks=self.blocks + grow)
+
+    # ---------------------------------------------------------------- queries
+    def points_free(self, points: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each point (N, 3) is in open free space -> bool (N,)."""
+        pts = _points(points)
+        return geometry.points_free(pts, self._blocks_by_coordinate, self.boundary)
+
+    def is_free(self, point: ArrayLike) -> bool:
+        """Whether one point (3,) is in open free space."""
+        x, y, z = np.asarray(point, dtype=np.float64)
+        return geometry.point_free(x, y, z, self._blocks_by_coordinate, self.boundary)
+
+    def segments_free(self, segments: ArrayLike) -> NDArray[np.bool_]:
+        """Whether each closed segment (N, 2, 3) lies wholly in free space -> bool (N,)."""
+        segs = _segments(segments)
+        return geometry.segments_free(segs, self._blocks_by_coordinate, self.boundary)
+
+    def segment_free(self, start: ArrayLike, end: ArrayLike) -> bool:
+        """Whether the closed segment start -> end (each (3,)) lies wholly in free space."""
+        p = np.asarray(start, dtype=np.float64)
+        q = np.asarray(end, dtype=np.float64)
+        return geometry.segment_free(p, q, self._blocks_by_coordinate, self.boundary)
+
+    def clearances(self, points: ArrayLike) -> FloatArray:
+        """Signed clearance (N,) of points (N, 3), metres.
+
+        Positive in free space: the distance to the nearest block surface or boundary
+        face. Zero on a surface; negative inside a block or outside the boundary.
+        """
+        pts = _points(points)
+        return geometry.clearances(pts, self._blocks_by_coordinate, self.boundary)
+
+    def clearance(self, point: ArrayLike) -> float:
+        """Signed clearance of one point (3,), metres (see :meth:`clearances`)."""
+        return float(self.clearances(np.reshape(point, (1, 3)))[0])
+
+    def first_hits(self, segments: ArrayLike) -> tuple[FloatArray, NDArray[np.int64]]:
+        """First contact along each segment (N, 2, 3).
+
+        Returns ``(t, index)``, both (N,): ``t`` in [0, 1] is the fraction along the
+        segment, ``index`` the block row, :data:`~quadnav.world.geometry.HIT_BOUNDARY`
+        for the boundary, or :data:`~quadnav.world.geometry.NO_HIT` (with ``t = inf``)
+        for a segment that stays free.
+        """
+        segs = _segments(segments)
+        return geometry.first_hits(segs, self._blocks_by_coordinate, self.boundary)
+
+    def first_hit(self, start: ArrayLike, end: ArrayLike) -> Hit | None:
+        """The first contact along start -> end, or ``None`` if the segment is free."""
+        p, q = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+        ts, index = self.first_hits(np.stack([p, q])[None])
+        if index[0] == geometry.NO_HIT:
+            return None
+        t = float(ts[0])
+        block = None if index[0] == geometry.HIT_BOUNDARY else int(index[0])
+        return Hit(t=t, point=p + t * (q - p), block=block)
+
+    def blocks_containing(self, point: ArrayLike) -> NDArray[np.int64]:
+        """Rows of every closed block that contains the point (3,)."""
+        p = np.asarray(point, dtype=np.float64)
+        inside = np.all((self.blocks[:, :3] <= p) & (p <= self.blocks[:, 3:]), axis=1)
+        return np.flatnonzero(inside)
+
+    def in_boundary(self, point: ArrayLike) -> bool:
+        """Whether the point (3,) lies in the closed boundary box."""
+        p = np.asarray(point, dtype=np.float64)
+        return bool(np.all((self.lower <= p) & (p <= self.upper)))
+
+    def free_volume_fraction(self) -> float:
+        """Fraction of the boundary volume not covered by blocks (exact, overlaps once)."""
+        lower = np.maximum(self.blocks[:, :3], self.lower)
+        upper = np.minimum(self.blocks[:, 3:], self.upper)
+        clipped = np.concatenate([lower, upper], axis=1)
+        clipped = clipped[np.all(clipped[:, :3] < clipped[:, 3:], axis=1)]
+        occupied = geometry.union_volume(np.ascontiguousarray(clipped))
+        return 1.0 - occupied / float(np.prod(self.extent))
+
+    def sample_free(self, n: int, seed: int | np.random.Generator | None = 0) -> FloatArray:
+        """``n`` points (n, 3) drawn uniformly from free space, reproducibly by ``seed``."""
+        rng = np.random.default_rng(seed)
+        found: list[FloatArray] = []
+        count = 0
+        batch = max(64, 2 * n)
+        for _ in range(1000):
+            candidates = rng.uniform(self.lower, self.upper, size=(batch, 3))
+            free = candidates[self.points_free(candidates)]
+            found.append(free)
+            count += len(free)
+            if count >= n:
+                return np.concatenate(found)[:n]
+        raise ValueError(f"{self.name}: found only {count} free points in {1000 * batch} draws")
+
+
+def _points(points: ArrayLike) -> FloatArray:
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"points must have shape (N, 3), got {pts.shape}")
+    return pts
+
+
+def _segments(segments: ArrayLike) -> FloatArray:
+    segs = np.ascontiguousarray(segments, dtype=np.float64)
+    if segs.ndim != 3 or segs.shape[1:] != (2, 3):
+        raise ValueError(f"segments must have shape (N, 2, 3), got {segs.shape}")
+    return segs

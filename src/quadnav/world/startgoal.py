@@ -1,0 +1,51 @@
+"""RBE595 start/goal files: lines ``start: (x, y, z)`` and ``goal: (x, y, z)``.
+
+Blank lines and ``#`` comments are allowed; the parentheses and spaces are optional.
+In the course's Tello maps ``z = 0`` means "take off (or land) here".
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from quadnav.errors import MapError
+from quadnav.world.reading import decode_text, parse_float
+
+_LINE = re.compile(r"^\s*(start|goal)\s*:\s*\(?([^()]*)\)?\s*$", re.IGNORECASE)
+
+
+def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
+    """(start, goal), each (3,) metres, from the text of a start/goal file."""
+    found: dict[str, np.ndarray] = {}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        content = raw.split("#", 1)[0]
+        if not content.strip():
+            continue
+        match = _LINE.match(content)
+        if match is None:
+            raise MapError(source, "expected 'start: (x, y, z)' or 'goal: (x, y, z)', "
+                           f"got {content.strip()[:40]!r}", number)
+        key = match.group(1).lower()
+        if key in found:
+            raise MapError(source, f"a second '{key}' line: expected one", number)
+        parts = [p for p in re.split(r"[,\s]+", match.group(2).strip()) if p]
+        if len(parts) != 3:
+            raise MapError(source, f"{key}: expected 3 numbers (x, y, z), got {len(parts)}",
+                           number)
+        found[key] = np.array([parse_float(p, source, number, key) for p in parts])
+    for key in ("start", "goal"):
+        if key not in found:
+            raise MapError(source, f"no '{key}: (x, y, z)' line")
+    return found["start"], found["goal"]
+
+
+def read_start_goal(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """(start, goal), each (3,) metres, from an RBE595 start/goal file."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        raise MapError(str(path), f"cannot read: {error.strerror}") from None
+    return parse_start_goal(decode_text(data, str(path)), str(path))

@@ -1,0 +1,169 @@
+"""The ``quadnav`` command line, run as a user runs it: a real process."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from quadnav import __version__
+from quadnav.world import read_map
+
+# The console script installed beside this Python, as a user would run it.
+SCRIPT = Path(sys.executable).with_name("quadnav")
+QUADNAV = [str(SCRIPT)] if SCRIPT.exists() else [sys.executable, "-m", "quadnav"]
+
+
+def run(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run([*QUADNAV, *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=120)
+
+
+def assert_user_error(result: subprocess.CompletedProcess, *fragments: str) -> None:
+    """Exit 2, exactly one line on stderr containing every fragment, no traceback."""
+    assert result.returncode == 2, result
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def test_version_and_help():
+    result = run("--version")
+    assert result.returncode == 0 and result.stdout.strip() == f"quadnav {__version__}"
+    for command in ([], ["map"], ["map", "info"], ["map", "check"], ["map", "show"],
+                    ["map", "convert"], ["worlds"]):
+        result = run(*command, "--help")
+        assert result.returncode == 0 and "usage: quadnav" in result.stdout, command
+
+
+def test_map_info_on_a_real_map(shared_maps):
+    result = run("map", "info", shared_maps / "meam620/test_window.json")
+    assert result.returncode == 0, result.stderr
+    out = result.stdout
+    assert "bounds:      x 0 .. 10, y -5 .. 20, z 0 .. 6 m" in out
+    assert "blocks:      8" in out
+    assert "free volume: 92.12 %" in out
+    assert "start:       (0.1, -4.9, 0.2)" in out
+    assert "margin:      0.3 m" in out
+
+
+def test_map_info_on_a_built_in_world():
+    result = run("map", "info", "forest:size=30x20x5,seed=2")
+    assert result.returncode == 0, result.stderr
+    assert "size:        30 x 20 x 5 m" in result.stdout
+    assert "start:" in result.stdout and "goal:" in result.stdout
+
+
+def test_map_check_reports_margin_block_and_outside(shared_maps):
+    window = shared_maps / "meam620/test_window.json"
+    result = run("map", "check", window)
+    assert result.returncode == 0, result.stderr
+    assert "start (0.1, -4.9, 0.2): inside the 0.3 m safety margin (near the boundary)" in result.stdout
+    assert "goal (8, 18, 3): free" in result.stdout
+
+    result = run("map", "check", window, "--start", "1", "2.2", "1", "--goal", "5", "5", "9")
+    assert_user_error(result, "test_window.json", "start (1, 2.2, 1) is in a block",
+                      "goal (5, 5, 9) is outside the boundary")
+    assert "start (1, 2.2, 1): inside block 0 [0, 10] x [2, 2.5] x [0, 1.5]" in result.stdout
+
+    result = run("map", "check", shared_maps / "rbe595/map1.txt", "--margin", "0.2",
+                 "--start", "0", "-4.5", "0.5", "--goal", "8", "18", "3")
+    assert result.returncode == 0
+    assert "(on the boundary)" in result.stdout
+
+
+def test_map_check_with_a_start_goal_file(shared_maps):
+    result = run("map", "check", shared_maps / "rbe595/p2b_map1.txt",
+                 "--start-goal", shared_maps / "rbe595/p2b_startandgoal_map1.txt")
+    assert result.returncode == 0, result.stderr
+    assert "start (0, 0, 0): inside the 0.2 m safety margin (on the boundary)" in result.stdout
+
+
+def test_map_check_without_points_is_a_user_error(shared_maps):
+    assert_user_error(run("map", "check", shared_maps / "rbe595/map1.txt"), "has no start or goal")
+
+
+def test_map_show_writes_a_picture(tmp_path, shared_maps):
+    out = tmp_path / "map.png"
+    result = run("map", "show", shared_maps / "rbe595/map1.txt", "--start", "0.5", "-4.5", "0.5",
+                 "--goal", "8", "18", "3", "-o", out)
+    assert result.returncode == 0, result.stderr
+    from matplotlib.image import imread
+
+    image = imread(out)
+    assert image.shape[0] > 500 and image.shape[1] > 500
+    # Not blank: the red blocks and the start sphere put plenty of strongly red pixels in it.
+    red = (image[..., 0] > 0.6) & (image[..., 1] < 0.3) & (image[..., 2] < 0.3)
+    assert red.mean() > 0.01
+
+
+def test_map_show_defaults_to_the_built_in_world(tmp_path):
+    result = run("map", "show", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "map.png").stat().st_size > 10_000
+
+
+def test_map_convert_text_json_text(tmp_path, shared_maps):
+    source = shared_maps / "meam620/map_2017_boundary9fields.txt"
+    assert run("map", "convert", source, tmp_path / "m.json").returncode == 0
+    assert run("map", "convert", tmp_path / "m.json", tmp_path / "m.txt").returncode == 0
+    original, again = read_map(source), read_map(tmp_path / "m.txt")
+    np.testing.assert_array_equal(original.blocks, again.blocks)
+    np.testing.assert_array_equal(original.boundary, again.boundary)
+    data = json.loads((tmp_path / "m.json").read_text())
+    assert data["bounds"]["extents"] == [0, 20, 0, 5, 0, 6]
+
+
+def test_map_convert_a_built_in_world(tmp_path):
+    result = run("map", "convert", "window:seed=4", tmp_path / "w.json")
+    assert result.returncode == 0, result.stderr
+    assert read_map(tmp_path / "w.json").start is not None
+
+
+def test_worlds_lists_every_built_in_world_and_its_parameters():
+    result = run("worlds")
+    assert result.returncode == 0
+    for name in ("forest", "window", "maze", "empty"):
+        assert f"\n{name}" in "\n" + result.stdout
+    assert "density=" in result.stdout and "seed=" in result.stdout
+
+
+def test_clip_warning_is_one_line(tmp_path):
+    path = tmp_path / "m.txt"
+    path.write_text("boundary 0 0 0 5 5 5\nblock 4 4 4 6 6 6\n")
+    result = run("map", "info", path)
+    assert result.returncode == 0
+    assert result.stderr.strip() == f"quadnav: warning: {path}:2: block extends past the boundary; clipped to it"
+
+
+@pytest.mark.parametrize(("args", "fragments"), [
+    (["map", "info", "nowhere.txt"], ["nowhere.txt: no such map file, and not a built-in world"]),
+    (["map", "info", "forest:densty=3"], ["forest:densty=3", "densty"]),
+    (["map", "info", "{bad}"], ["{bad}"]),
+    (["map", "check", "empty", "--margin", "-1"], ["--margin", "expected a margin >= 0 m"]),
+    (["map", "check", "empty", "--start", "1", "2"], ["--start", "expected 3 argument"]),
+    (["map", "check", "empty", "--start", "1", "2", "nan"], ["--start", "expected a finite number"]),
+    (["map", "check", "empty", "--margin", "100"], ["margin 100 m leaves no free space"]),
+    (["map", "show", "empty", "-o", "map.xyz"], ["map.xyz: expected an image file name"]),
+    (["map", "show", "empty", "-o", "no/such/dir/map.png"], ["does not exist"]),
+    (["map", "convert", "empty", "no/such/dir/m.json"], ["no/such/dir/m.json: cannot write"]),
+    (["map", "frobnicate"], ["invalid choice: 'frobnicate'"]),
+    (["worlds", "--bogus"], ["unrecognized arguments: --bogus"]),
+    ([], ["required"]),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, fragments):
+    result = run(*args, cwd=tmp_path)
+    assert_user_error(result, *fragments)
+    assert list(tmp_path.iterdir()) == []  # nothing half-written
+
+
+def test_malformed_map_file_names_file_and_line(tmp_path):
+    path = tmp_path / "m.txt"
+    path.write_text("boundary 0 0 0 5 5 5\n\nblock 1 1 1 2 2\n")
+    assert_user_error(run("map", "info", path), f"{path}:3: block: expected 6 numbers")
