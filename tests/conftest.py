@@ -1,10 +1,15 @@
-"""Shared fixtures: the public map corpus in ../shared/maps (skipped when absent)."""
+"""Shared test set-up: deterministic hypothesis, and the public map corpus in ../shared/maps."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
+
+# Property tests draw the same examples on every run, so a CI result can be reproduced.
+settings.register_profile("quadnav", derandomize=True, database=None)
+settings.load_profile("quadnav")
 
 SHARED_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 

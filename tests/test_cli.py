@@ -153,6 +153,7 @@ def test_clip_warning_is_one_line(tmp_path):
     (["map", "show", "empty", "-o", "map.xyz"], ["map.xyz: expected an image file name"]),
     (["map", "show", "empty", "-o", "no/such/dir/map.png"], ["does not exist"]),
     (["map", "convert", "empty", "no/such/dir/m.json"], ["no/such/dir/m.json: cannot write"]),
+    (["map", "convert", "empty", "m.map"], ["m.map: expected a file name ending in .json"]),
     (["map", "frobnicate"], ["invalid choice: 'frobnicate'"]),
     (["worlds", "--bogus"], ["unrecognized arguments: --bogus"]),
     ([], ["required"]),

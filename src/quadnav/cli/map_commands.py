@@ -70,7 +70,7 @@ def show(args: argparse.Namespace) -> int:
 
 
 def convert(args: argparse.Namespace) -> int:
-    """Write a map in the format named by the output's extension (.json, else text)."""
+    """Write a map in the format named by the output's extension (.json or .txt)."""
     world = load_world(args.input)
     write_map(world, args.output)
     print(f"wrote {args.output} ({len(world)} blocks)")
@@ -109,8 +109,8 @@ def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
 
     p = commands.add_parser("convert", help="text <-> JSON",
                             description="Convert a map between the text and JSON formats; the "
-                                        "output's extension picks the format (.json, else "
-                                        "text). IN may be a built-in world spec.")
+                                        "output's extension picks the format (.json or "
+                                        ".txt). IN may be a built-in world spec.")
     p.add_argument("input", metavar="IN", help="map file or built-in world spec")
     p.add_argument("output", metavar="OUT", help="file to write (.json or .txt)")
     p.set_defaults(handler=convert)

@@ -130,21 +130,6 @@ def points_free(points, bt, boundary):
     return out
 
 
-@njit(cache=True, parallel=True)
-def points_in_blocks(points, bt):
-    """Index of the first closed block containing each point, or -1: (N, 3) -> int (N,)."""
-    n = points.shape[0]
-    out = np.full(n, -1, dtype=np.int64)
-    for k in prange(n):
-        x, y, z = points[k, 0], points[k, 1], points[k, 2]
-        for i in range(bt.shape[1]):
-            if (bt[0, i] <= x <= bt[3, i] and bt[1, i] <= y <= bt[4, i]
-                    and bt[2, i] <= z <= bt[5, i]):
-                out[k] = i
-                break
-    return out
-
-
 @njit(cache=True, inline="always")
 def _box_signed_distance(x, y, z, bt, i) -> float:
     """Signed Euclidean distance from a point to block ``i`` (negative inside)."""

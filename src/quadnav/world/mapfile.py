@@ -55,10 +55,13 @@ def load_world(source: str | Path | World) -> World:
 
 
 def format_map(world: World, path: str | Path) -> str:
-    """The world in the format that ``path``'s extension names (.json, else text)."""
-    if Path(path).suffix.lower() == ".json":
+    """The world in the format that ``path``'s extension names: .json or .txt."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".json":
         return format_json_map(world)
-    return format_text_map(world)
+    if suffix == ".txt":
+        return format_text_map(world)
+    raise MapError(str(path), "expected a file name ending in .json (JSON map) or .txt (text map)")
 
 
 def write_text_atomically(text: str, path: str | Path) -> None:
@@ -78,5 +81,5 @@ def write_text_atomically(text: str, path: str | Path) -> None:
 
 
 def write_map(world: World, path: str | Path) -> None:
-    """Write the world as a map file, JSON for a ``.json`` path and text otherwise."""
+    """Write the world as a map file: JSON for a ``.json`` path, text for ``.txt``."""
     write_text_atomically(format_map(world, path), path)
