@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import os
+import stat
 import warnings
 
 import numpy as np
 import pytest
 
-from quadnav.errors import MapError, MapWarning
+from quadnav.errors import MapError, MapWarning, QuadnavError
 from quadnav.world import parse_map, read_map, write_map
 from quadnav.world.startgoal import parse_start_goal
 
@@ -166,9 +168,22 @@ def test_write_both_formats_and_read_back(tmp_path):
 
 def test_a_failed_write_leaves_nothing_behind(tmp_path):
     world = text("boundary 0 0 0 1 1 1\n")
-    with pytest.raises(MapError, match="cannot write"):
+    with pytest.raises(QuadnavError, match="cannot write"):
         write_map(world, tmp_path / "missing-folder" / "w.json")
-    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "folder.json").mkdir()
+    with pytest.raises(QuadnavError, match="cannot write"):
+        write_map(world, tmp_path / "folder.json")
+    assert [p.name for p in tmp_path.iterdir()] == ["folder.json"]
+    assert list((tmp_path / "folder.json").iterdir()) == []
+
+
+def test_written_maps_get_ordinary_permissions(tmp_path):
+    mask = os.umask(0o022)
+    try:
+        write_map(text("boundary 0 0 0 1 1 1\n"), tmp_path / "w.txt")
+    finally:
+        os.umask(mask)
+    assert stat.S_IMODE((tmp_path / "w.txt").stat().st_mode) == 0o644
 
 
 # ----------------------------------------------------------------------- start/goal files

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
 from quadnav.errors import QuadnavError
+from quadnav.files import atomic_output
 
 
 def check_figure_path(path: str | Path) -> str:
@@ -27,11 +26,8 @@ def check_figure_path(path: str | Path) -> str:
 def save_figure(fig: Figure, path: str | Path) -> None:
     """Save and close ``fig``; the file at ``path`` is either complete or untouched."""
     fmt = check_figure_path(path)
-    fd, tmp = tempfile.mkstemp(dir=Path(path).parent, prefix=f".{Path(path).name}.")
-    os.close(fd)
     try:
-        fig.savefig(tmp, format=fmt)
-        os.replace(tmp, path)
+        with atomic_output(path) as tmp:
+            fig.savefig(tmp, format=fmt)
     finally:
-        Path(tmp).unlink(missing_ok=True)
         plt.close(fig)

@@ -14,6 +14,7 @@ where the offending JSON object begins.
 
 from __future__ import annotations
 
+import bisect
 import json
 import json.decoder
 import json.scanner
@@ -34,11 +35,12 @@ class _LocatedDict(dict):
 def _decode_with_lines(text: str) -> Any:
     """json.loads, but every object is a _LocatedDict carrying its 1-based line."""
     decoder = json.JSONDecoder()
+    newlines = [i for i, char in enumerate(text) if char == "\n"]
 
     def parse_object(s_and_end: tuple[str, int], *args: Any) -> tuple[dict, int]:
         obj, end = json.decoder.JSONObject(s_and_end, *args)
         located = _LocatedDict(obj)
-        located.line = text.count("\n", 0, s_and_end[1]) + 1
+        located.line = bisect.bisect_left(newlines, s_and_end[1]) + 1
         return located, end
 
     decoder.parse_object = parse_object  # type: ignore[assignment]

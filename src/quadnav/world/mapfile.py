@@ -6,11 +6,10 @@ A MAP is a path to a text or JSON map file, or the spec of a built-in world such
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 from quadnav.errors import MapError
+from quadnav.files import atomic_output
 from quadnav.world import builtin
 from quadnav.world.jsonmap import format_json_map, parse_json_map
 from quadnav.world.model import World
@@ -64,22 +63,8 @@ def format_map(world: World, path: str | Path) -> str:
     raise MapError(str(path), "expected a file name ending in .json (JSON map) or .txt (text map)")
 
 
-def write_text_atomically(text: str, path: str | Path) -> None:
-    """Write ``text`` to ``path`` so that the file is either whole or untouched."""
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent or ".", prefix=f".{path.name}.")
-    except OSError as error:
-        raise MapError(str(path), f"cannot write: {error.strerror}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except OSError as error:
-        Path(tmp).unlink(missing_ok=True)
-        raise MapError(str(path), f"cannot write: {error.strerror}") from None
-
-
 def write_map(world: World, path: str | Path) -> None:
     """Write the world as a map file: JSON for a ``.json`` path, text for ``.txt``."""
-    write_text_atomically(format_map(world, path), path)
+    text = format_map(world, path)
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")

@@ -1,0 +1,42 @@
+"""Writing output files whole or not at all."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from quadnav.errors import QuadnavError
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextmanager
+def atomic_output(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success move it to ``path``.
+
+    The file at ``path`` is therefore either the complete new file or untouched, and
+    the temporary file is removed on failure. The new file gets the usual permissions
+    (0666 less the umask). An unwritable place is a one-line QuadnavError.
+    """
+    path = Path(path)
+    try:
+        fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot write: {error.strerror}") from None
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        yield tmp
+        tmp.chmod(0o666 & ~_umask())
+        os.replace(tmp, path)
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot write: {error.strerror}") from None
+    finally:
+        tmp.unlink(missing_ok=True)
