@@ -101,7 +101,8 @@ def test_points_and_clearance_match_a_reference(world, pts):
     boundary_distance = np.minimum(pts, 10 - pts).min(axis=1)
     if len(world.blocks):
         distance = reference_signed_distance(pts, world.blocks)
-        in_block = np.any(distance <= 0, axis=1)
+        lower, upper = world.blocks[None, :, :3], world.blocks[None, :, 3:]
+        in_block = np.any(np.all((lower <= pts[:, None]) & (pts[:, None] <= upper), axis=2), axis=1)
         expected_clearance = np.minimum(boundary_distance, distance.min(axis=1))
     else:
         in_block = np.zeros(len(pts), dtype=bool)
