@@ -58,7 +58,7 @@ def _axis_interval(lower, upper, p, inverse, parallel):
 def _slab_entry_exit(p, inverse, parallel, bt, i):
     """Parameters (t_enter, t_exit) where the line p + t d meets closed block ``i``.
 
-    ``inverse`` and ``parallel`` are (3,) tuples from :func:`_inverse` of ``d``.
+    ``inverse`` and ``parallel`` are the (3,) tuples :func:`_inverses` gives for ``d``.
     """
     e0, x0 = _axis_interval(bt[0, i], bt[3, i], p[0], inverse[0], parallel[0])
     e1, x1 = _axis_interval(bt[1, i], bt[4, i], p[1], inverse[1], parallel[1])
