@@ -29,3 +29,7 @@ class MapError(QuadnavError):
 
 class MapWarning(UserWarning):
     """Something in a map was repaired while reading it (a block clipped or dropped)."""
+
+
+class PlanningWarning(UserWarning):
+    """A planning query was adjusted (e.g. a start inside the safety margin)."""

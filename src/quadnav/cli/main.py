@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 from quadnav import __version__
 from quadnav.cli.map_commands import add_map_commands
+from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.worlds_command import add_worlds_command
 from quadnav.errors import QuadnavError
 
@@ -35,6 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"quadnav {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     add_map_commands(commands)
+    add_plan_command(commands)
     add_worlds_command(commands)
     return parser
 

@@ -1,4 +1,8 @@
-"""A conservative proof that two points are connected in a world's free space.
+"""Conservative proofs that two points are connected, or disconnected, in free space.
+
+:func:`connected` under-approximates free space; :func:`disconnected` over-approximates
+it. Either answer is a proof when it is ``True``; ``False`` proves nothing.
+
 
 The boundary box is cut into a grid of equal voxels (boxes of at most ``resolution``
 metres a side). A voxel is *free* when its **closed** box touches no closed block. Two
@@ -74,6 +78,32 @@ def connected(
     return bool(labels[tuple(cells[0])] == labels[tuple(cells[1])])
 
 
+def disconnected(world: World, start: ArrayLike, goal: ArrayLike,
+                 max_voxels: int = 1_000_000) -> bool:
+    """Whether ``start`` and ``goal`` are provably in different parts of free space.
+
+    Pass the world already inflated by the safety margin, and free points. The boundary
+    box is cut into at most ``max_voxels`` voxels; a voxel is *blocked* when its closed box
+    lies inside one closed block, so it holds no free point. Any free path crosses a chain
+    of unblocked voxels that share a face, edge or corner; when the start's and goal's
+    voxels are in different 26-connected components of unblocked voxels, no such chain and
+    so no path exists: ``True`` is a proof. ``False`` proves nothing.
+    """
+    points = np.array([start, goal], dtype=np.float64)
+    shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)
+                               - _ROUNDING), 1).astype(np.int64)
+    voxel = world.extent / shape
+    # Voxel i is inside [lo, hi] when lo <= origin + i v and origin + (i + 1) v <= hi;
+    # rounding shrinks the index range, so it can only leave more voxels unblocked.
+    first = np.ceil((world.blocks[:, :3] - world.lower) / voxel + _ROUNDING)
+    last = np.floor((world.blocks[:, 3:] - world.lower) / voxel - 1 - _ROUNDING)
+    blocked = _covered(first.astype(np.int64), last.astype(np.int64), shape)
+    cells = np.clip(np.floor((points - world.lower) / voxel), 0, shape - 1).astype(np.int64)
+    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3), dtype=bool))
+    start_label, goal_label = labels[tuple(cells[0])], labels[tuple(cells[1])]
+    return bool(start_label and goal_label and start_label != goal_label)
+
+
 def _occupied(
     blocks: NDArray[np.float64],
     origin: NDArray[np.float64],
@@ -83,12 +113,21 @@ def _occupied(
     """Bool grid ``shape`` (3,): True where the closed voxel touches a closed block.
 
     Voxel ``i`` along an axis spans ``[origin + i v, origin + (i + 1) v]``, so it touches
-    a block ``[lo, hi]`` when ``(lo - origin) / v - 1 <= i <= (hi - origin) / v``. Every
-    block adds +-1 at the 8 corners of its index range in a difference array whose
-    cumulative sum along the three axes counts the blocks touching each voxel.
+    a block ``[lo, hi]`` when ``(lo - origin) / v - 1 <= i <= (hi - origin) / v``.
     """
     first = np.ceil((blocks[:, :3] - origin) / voxel - 1 - _ROUNDING).astype(np.int64)
     last = np.floor((blocks[:, 3:] - origin) / voxel + _ROUNDING).astype(np.int64)
+    return _covered(first, last, shape)
+
+
+def _covered(first: NDArray[np.int64], last: NDArray[np.int64], shape: NDArray[np.int64]
+             ) -> NDArray[np.bool_]:
+    """Bool grid ``shape`` (3,): True in every voxel of some index box ``first..last``.
+
+    ``first`` and ``last`` are (N, 3) inclusive index ranges, clipped here to the grid.
+    Every box adds +-1 at the 8 corners of its range in a difference array whose
+    cumulative sum along the three axes counts the boxes covering each voxel.
+    """
     first = np.maximum(first, 0)
     last = np.minimum(last, shape - 1)
     inside = np.all(first <= last, axis=1)

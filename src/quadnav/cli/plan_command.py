@@ -1,0 +1,161 @@
+"""``quadnav plan``: plan a path, post-process it, write path.csv, plan.json, plan.png."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from tqdm import tqdm
+
+from quadnav.cli.args import (
+    add_map_argument,
+    add_margin_argument,
+    add_start_goal_arguments,
+    finite_float,
+    resolve_margin,
+    resolve_start_goal,
+)
+from quadnav.errors import QuadnavError
+from quadnav.files import atomic_output
+from quadnav.planning import PlannerSettings, get_planner, make_problem, planner_names
+from quadnav.planning.refine import refine
+from quadnav.planning.report import path_csv, plan_summary
+from quadnav.planning.settings import DEFAULT_TIME_LIMIT
+from quadnav.world import load_world
+
+#: Exit code when the search ends without a path (the input itself was fine).
+EXIT_NO_PATH = 1
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def natural(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
+
+
+def probability(text: str) -> float:
+    """argparse type: a number in [0, 1)."""
+    value = finite_float(text)
+    if not 0 <= value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {text!r}")
+    return value
+
+
+def _output_folder(path: str) -> Path:
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise QuadnavError(f"{folder}: expected a folder for the output, found a file")
+    return folder
+
+
+def settings_from(args: argparse.Namespace) -> PlannerSettings:
+    """Planner settings from the command-line flags."""
+    return PlannerSettings(time_limit=args.time, max_iterations=args.iterations or None,
+                           seed=args.seed, stop_at_first=args.first, step=args.step,
+                           goal_bias=args.goal_bias, goal_tolerance=args.goal_tolerance)
+
+
+def plan(args: argparse.Namespace) -> int:
+    """Plan, refine and write the three output files; exit 1 if no path was found."""
+    from quadnav.viz.figures import save_figure
+    from quadnav.viz.plan_figure import plan_figure
+
+    planner = get_planner(args.planner)
+    folder = _output_folder(args.output)
+    settings = settings_from(args)
+    world = load_world(args.map)
+    start, goal = resolve_start_goal(args, world)
+    problem = make_problem(world, start, goal, resolve_margin(args, world))
+    with tqdm(total=100, desc=args.planner, unit="%", leave=False, disable=args.quiet,
+              file=sys.stderr, bar_format="{desc}: {bar} {n:.0f}%{postfix}") as bar:
+        def progress(fraction: float, best: float) -> None:
+            bar.set_postfix_str(f"best {best:.2f} m" if best < float("inf") else "no path yet",
+                                refresh=False)
+            bar.update(100 * fraction - bar.n)
+
+        result = planner(problem, settings, progress)
+    raw_length = result.length
+    if not args.no_refine:
+        result = refine(problem, result)
+    folder.mkdir(parents=True, exist_ok=True)
+    stale_path = folder / "path.csv"
+    if result.solved:
+        with atomic_output(stale_path) as tmp:
+            tmp.write_text(path_csv(result.path))
+    else:
+        stale_path.unlink(missing_ok=True)
+    with atomic_output(folder / "plan.json") as tmp:
+        tmp.write_text(json.dumps(plan_summary(problem, result, settings, raw_length),
+                                  indent=2) + "\n")
+    save_figure(plan_figure(problem, result), folder / "plan.png")
+    _print_summary(problem.world.name, result, raw_length)
+    written = ["path.csv"] if result.solved else []
+    print("wrote " + ", ".join(str(folder / name) for name in [*written, "plan.json",
+                                                               "plan.png"]))
+    if not result.solved:
+        print(f"quadnav: no path: {result.message}", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
+def _print_summary(name: str, result, raw_length: float) -> None:
+    stats = result.stats
+    first = ("no solution" if stats.time_to_first is None
+             else f"first after {1e3 * stats.time_to_first:.3g} ms")
+    print(f"{name}: {result.planner}, seed {result.seed}: {stats.iterations:,} iterations, "
+          f"{stats.nodes:,} nodes in {stats.seconds:.3g} s, {first}")
+    if result.solved:
+        print(f"  search:   {raw_length:.3f} m")
+        for step in stats.post:
+            print(f"  {step.name + ':':<9} {step.length:.3f} m ({step.vertices} vertices)")
+
+
+def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav plan`` on the top-level subparsers."""
+    p = subparsers.add_parser(
+        "plan", help="plan a collision-free path (RRT* or OMPL)",
+        description="Plan a collision-free path through MAP with RRT* (or an OMPL planner), "
+                    "shortcut and smooth it, and write DIR/path.csv (x,y,z per vertex), "
+                    "DIR/plan.json (statistics) and DIR/plan.png (tree and path). Exit 1 "
+                    "when no path is found within the budget (plan.json and plan.png are "
+                    "still written), 2 on bad input.")
+    add_map_argument(p, optional=True)
+    add_start_goal_arguments(p)
+    add_margin_argument(p)
+    p.add_argument("--planner", default="rrtstar", metavar="NAME",
+                   help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    p.add_argument("--time", type=positive_float, default=DEFAULT_TIME_LIMIT, metavar="S",
+                   help=f"search time budget in seconds (default: {DEFAULT_TIME_LIMIT:g})")
+    p.add_argument("--seed", type=natural, default=0, metavar="N",
+                   help="random seed; the same seed gives the same path (default: 0)")
+    p.add_argument("--iterations", type=natural, default=0, metavar="N",
+                   help="stop after N samples as well (default: time budget only)")
+    p.add_argument("--first", action="store_true",
+                   help="stop at the first solution instead of improving it")
+    p.add_argument("--step", type=positive_float, metavar="M",
+                   help="largest tree edge in metres (default: 5%% of the map's diagonal)")
+    p.add_argument("--goal-bias", type=probability, default=PlannerSettings.goal_bias,
+                   metavar="P", help="probability of sampling the goal (default: 0.05)")
+    p.add_argument("--goal-tolerance", type=positive_float, metavar="M",
+                   help="join the goal from vertices this close, metres (default: the step)")
+    p.add_argument("--no-refine", action="store_true",
+                   help="skip shortcut pruning and smoothing")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-o", "--output", default="plan", metavar="DIR",
+                   help="folder to write into, created if needed (default: plan)")
+    p.set_defaults(handler=plan)

@@ -1,0 +1,65 @@
+"""Planners by name: ``rrtstar`` (ours) and ``ompl:NAME`` (the optional OMPL wheel).
+
+Every planner is a function with the :data:`Planner` signature. It searches
+``problem.free_world`` from ``problem.search_start`` to ``problem.search_goal`` and
+returns a :class:`~quadnav.planning.result.PlanResult` whose path runs from exactly
+``problem.start`` to exactly ``problem.goal`` (:meth:`PlanningProblem.full_path` adds
+the legs out of the margin). To add a planner, write such a function and register it in
+:data:`_OURS`.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from collections.abc import Callable
+
+from quadnav.errors import QuadnavError
+from quadnav.planning.problem import PlanningProblem
+from quadnav.planning.result import PlanResult
+from quadnav.planning.settings import PlannerSettings
+
+#: ``progress(fraction of the budget used in [0, 1], best path length so far or inf)``.
+Progress = Callable[[float, float], None]
+#: ``planner(problem, settings, progress or None) -> PlanResult``.
+Planner = Callable[[PlanningProblem, PlannerSettings, Progress | None], PlanResult]
+
+#: Prefix of the names of OMPL planners.
+OMPL_PREFIX = "ompl:"
+#: OMPL geometric planners offered through ``ompl:NAME``.
+OMPL_PLANNERS = ("RRTstar", "InformedRRTstar", "BITstar", "RRTConnect", "PRMstar")
+
+
+def _rrtstar(problem: PlanningProblem, settings: PlannerSettings,
+             progress: Progress | None) -> PlanResult:
+    from quadnav.planning.rrtstar import plan_rrtstar
+
+    return plan_rrtstar(problem, settings, progress)
+
+
+_OURS: dict[str, Planner] = {"rrtstar": _rrtstar}
+
+
+def planner_names() -> list[str]:
+    """Every planner name ``get_planner`` accepts (OMPL's whether installed or not)."""
+    return [*_OURS, *(OMPL_PREFIX + name for name in OMPL_PLANNERS)]
+
+
+def ompl_available() -> bool:
+    """Whether the optional ``ompl`` wheel is installed."""
+    return importlib.util.find_spec("ompl") is not None
+
+
+def get_planner(name: str) -> Planner:
+    """The planner called ``name``; QuadnavError naming the choices if there is none."""
+    if name in _OURS:
+        return _OURS[name]
+    if name.startswith(OMPL_PREFIX) and name[len(OMPL_PREFIX):] in OMPL_PLANNERS:
+        if not ompl_available():
+            raise QuadnavError(f"planner {name!r} needs the optional OMPL wheel: "
+                               "python -m pip install 'quadnav[ompl]'")
+        from quadnav.planning.ompl_planners import plan_ompl
+
+        ompl_name = name[len(OMPL_PREFIX):]
+        return lambda problem, settings, progress: plan_ompl(problem, settings, ompl_name,
+                                                             progress)
+    raise QuadnavError(f"unknown planner {name!r}; expected one of {', '.join(planner_names())}")

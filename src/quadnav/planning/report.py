@@ -1,0 +1,74 @@
+"""Plain-data views of a planning result: the path as CSV, the statistics as JSON."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from typing import Any
+
+import numpy as np
+
+from quadnav.planning.problem import PlanningProblem
+from quadnav.planning.result import PlanResult
+from quadnav.planning.settings import PlannerSettings
+
+
+def path_csv(path: np.ndarray) -> str:
+    """The path (N, 3) as CSV text with the header ``x,y,z`` (metres, full precision)."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["x", "y", "z"])
+    writer.writerows([[repr(float(v)) for v in row] for row in path])
+    return out.getvalue()
+
+
+def _number(value: float | None) -> float | None:
+    """JSON has no infinity: ``None`` stands for a missing or infinite value."""
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def plan_summary(problem: PlanningProblem, result: PlanResult, settings: PlannerSettings,
+                 raw_length: float | None = None) -> dict[str, Any]:
+    """Everything about a query and its result except the tree, as JSON-ready data.
+
+    Lengths in metres, times in seconds. ``raw_length`` is the length before
+    post-processing (default: the result's own length).
+    """
+    world = problem.free_world
+    stats = result.stats
+    return {
+        "map": problem.world.name,
+        "planner": result.planner,
+        "seed": result.seed,
+        "solved": result.solved,
+        "message": result.message,
+        "margin": problem.margin,
+        "start": problem.start.tolist(),
+        "goal": problem.goal.tolist(),
+        "search_start": problem.search_start.tolist(),
+        "search_goal": problem.search_goal.tolist(),
+        "length": _number(result.length),
+        "raw_length": _number(result.length if raw_length is None else raw_length),
+        "vertices": len(result.path),
+        "settings": {
+            "time_limit": settings.time_limit,
+            "max_iterations": settings.max_iterations,
+            "stop_at_first": settings.stop_at_first,
+            "step": settings.step_for(world),
+            "goal_bias": settings.goal_bias,
+            "goal_tolerance": settings.goal_tolerance_for(world),
+            "rewire_factor": settings.rewire_factor,
+            "informed": settings.informed,
+        },
+        "stats": {
+            "iterations": stats.iterations,
+            "nodes": stats.nodes,
+            "seconds": stats.seconds,
+            "time_to_first": stats.time_to_first,
+            "cost_history": stats.cost_history.tolist(),
+            "post": [{"name": s.name, "length": s.length, "vertices": s.vertices,
+                      "seconds": s.seconds} for s in stats.post],
+        },
+        "straight_line": float(np.linalg.norm(problem.goal - problem.start)),
+    }

@@ -1,0 +1,127 @@
+"""What every planner returns: :class:`PlanResult`, with :class:`PlanStats`.
+
+A planner's result is plain data — the path, the explored tree (for drawing) and how the
+search went — so that any planner (ours, OMPL's) can be drawn, compared and post-processed
+the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def path_length(path: FloatArray) -> float:
+    """Sum of the segment lengths of a polyline (N, 3), metres (0 for N < 2)."""
+    points = np.asarray(path, dtype=np.float64)
+    if len(points) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
+@dataclass(frozen=True)
+class PostStep:
+    """One post-processing step applied to a path.
+
+    Attributes:
+        name: what was done, e.g. ``"shortcut"`` or ``"smooth"``.
+        length: path length after the step, metres.
+        vertices: number of path vertices after the step.
+        seconds: wall time the step took.
+    """
+
+    name: str
+    length: float
+    vertices: int
+    seconds: float
+
+
+@dataclass(frozen=True, eq=False)
+class PlanStats:
+    """How a search went.
+
+    Attributes:
+        iterations: samples drawn (for OMPL planners: as reported, else 0).
+        nodes: vertices in the tree or roadmap.
+        seconds: wall time of the search, s.
+        time_to_first: wall time until the first solution, s; ``None`` if none was found.
+        cost_history: (K, 2) rows ``(time s, path length m)``, one per improvement of
+            the best solution, in time order; (0, 2) when there was no solution.
+        post: post-processing steps applied after the search, in order.
+    """
+
+    iterations: int
+    nodes: int
+    seconds: float
+    time_to_first: float | None
+    cost_history: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
+    post: tuple[PostStep, ...] = ()
+
+    def __post_init__(self) -> None:
+        history = np.array(self.cost_history, dtype=np.float64).reshape(-1, 2)
+        object.__setattr__(self, "cost_history", _read_only(history))
+
+
+@dataclass(frozen=True, eq=False)
+class PlanResult:
+    """The outcome of one planning query.
+
+    Attributes:
+        planner: the planner's name, e.g. ``"rrtstar"`` or ``"ompl:BITstar"``.
+        solved: whether a collision-free path was found.
+        path: (N, 3) polyline in metres from exactly the start to exactly the goal;
+            (0, 3) when not solved.
+        tree_nodes: (M, 3) explored vertices, metres (may be (0, 3)).
+        tree_parents: (M,) index of each vertex's parent in ``tree_nodes``, -1 for a root
+            (for a roadmap, edges are given the same way, one parent per vertex).
+        stats: how the search went.
+        seed: the seed the planner ran with.
+        message: one line for the user, e.g. why there is no path.
+    """
+
+    planner: str
+    solved: bool
+    path: FloatArray
+    tree_nodes: FloatArray
+    tree_parents: IntArray
+    stats: PlanStats
+    seed: int
+    message: str = ""
+
+    def __post_init__(self) -> None:
+        path = np.array(self.path, dtype=np.float64).reshape(-1, 3)
+        nodes = np.array(self.tree_nodes, dtype=np.float64).reshape(-1, 3)
+        parents = np.array(self.tree_parents, dtype=np.int64).reshape(-1)
+        if len(parents) != len(nodes):
+            raise ValueError(f"tree_parents has {len(parents)} entries for {len(nodes)} nodes")
+        if self.solved != (len(path) >= 2):
+            raise ValueError("a solved result needs a path of at least 2 points, else none")
+        object.__setattr__(self, "path", _read_only(path))
+        object.__setattr__(self, "tree_nodes", _read_only(nodes))
+        object.__setattr__(self, "tree_parents", _read_only(parents))
+
+    @property
+    def length(self) -> float:
+        """Path length in metres (``inf`` when not solved)."""
+        return path_length(self.path) if self.solved else float("inf")
+
+    def replace(self, **changes: object) -> PlanResult:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    def tree_edges(self) -> FloatArray:
+        """(E, 2, 3) segments from each non-root vertex to its parent, for drawing."""
+        child = np.flatnonzero(self.tree_parents >= 0)
+        return np.stack([self.tree_nodes[child], self.tree_nodes[self.tree_parents[child]]],
+                        axis=1).reshape(-1, 2, 3)

@@ -1,0 +1,265 @@
+"""The RRT* iteration, compiled with numba; driven in chunks by :mod:`quadnav.planning.rrtstar`.
+
+One iteration, as the course reports and Karaman & Frazzoli (2011) describe it:
+
+1. sample: the goal with probability ``goal_bias``; else, once a solution of length c
+   exists and informed sampling is on, a point of the prolate ellipsoid of points x with
+   ``|x - start| + |x - goal| < c`` (Gammell et al. 2014); else a point of the box;
+2. nearest vertex; steer towards the sample by at most ``step`` metres;
+3. exact segment check (:func:`quadnav.world.blockgrid.grid_segment_free`);
+4. near set: vertices within ``min(gamma (log n / n)^(1/3), step)``, with OMPL's
+   ``gamma = rewire_factor (2 (1 + 1/3) volume / unit-ball volume)^(1/3)``; the volume is
+   the box's, or once a solution exists and sampling is informed, that of the ellipsoid
+   if smaller (as OMPL does with its pruned measure);
+5. choose parent: the near vertex giving the cheapest cost-to-come through a free edge
+   (candidates tried cheapest first, so most edges are never checked);
+6. rewire: near vertices that get cheaper through the new vertex are re-parented, and the
+   change of cost is pushed down to their descendants;
+7. goal: a vertex within ``goal_tolerance`` of the goal with a free straight segment to
+   it joins the goal set; the best solution is the cheapest vertex of that set plus its
+   last segment.
+
+All state lives in arrays owned by the caller (see :class:`TreeState` in ``rrtstar.py``)
+so that the search can be run in chunks between wall-clock checks.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from quadnav.planning.nodegrid import insert, nearest, within
+from quadnav.world.blockgrid import grid_segment_free
+
+# Counters in the ``counts`` array.
+NODES, ITERATIONS, GOAL_VERTICES = 0, 1, 2
+# Entries of the ``best`` array: length of the best solution (inf if none) and its last
+# tree vertex (-1 if none).
+BEST_COST, BEST_VERTEX = 0, 1
+# Tries at drawing an informed sample inside the box before using the box itself.
+_INFORMED_TRIES = 64
+# A rewire must save at least this much, metres, so rounding cannot make it cycle.
+_REWIRE_EPS = 1e-12
+
+
+@njit(cache=True, inline="always")
+def _norm(a, b):
+    return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
+
+
+@njit(cache=True)
+def _box_sample(rng, lower, extent, out):
+    for a in range(3):
+        out[a] = lower[a] + rng.random() * extent[a]
+
+
+@njit(cache=True)
+def _inside(point, lower, extent):
+    for a in range(3):
+        if not (lower[a] <= point[a] <= lower[a] + extent[a]):
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _ellipsoid_volume(cost, focal):
+    """Volume, m^3, of the points whose distances to two foci ``focal`` metres apart sum
+    to less than ``cost`` metres."""
+    return math.pi / 6.0 * cost * (cost * cost - focal * focal)
+
+
+@njit(cache=True)
+def _informed_sample(rng, cost, start, goal, rotation, lower, extent, out):
+    """A sample where a path shorter than ``cost`` could pass, inside the box.
+
+    Draws uniformly from the prolate ellipsoid (foci start and goal, major axis ``cost``)
+    when it is smaller than the box, else from the box with rejection; falls back to a
+    plain box sample after a few failed tries.
+    """
+    focal = _norm(start, goal)
+    a = 0.5 * cost
+    b = 0.5 * math.sqrt(max(cost * cost - focal * focal, 0.0))
+    ellipsoid = _ellipsoid_volume(cost, focal)
+    box = extent[0] * extent[1] * extent[2]
+    for _ in range(_INFORMED_TRIES):
+        if ellipsoid < box:
+            u0, u1, u2 = rng.standard_normal(), rng.standard_normal(), rng.standard_normal()
+            scale = rng.random() ** (1.0 / 3.0) / math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+            local = (a * u0 * scale, b * u1 * scale, b * u2 * scale)
+            for k in range(3):
+                out[k] = 0.5 * (start[k] + goal[k]) + (rotation[k, 0] * local[0]
+                                                       + rotation[k, 1] * local[1]
+                                                       + rotation[k, 2] * local[2])
+            if _inside(out, lower, extent):
+                return
+        else:
+            _box_sample(rng, lower, extent, out)
+            if _norm(out, start) + _norm(out, goal) < cost:
+                return
+    _box_sample(rng, lower, extent, out)
+
+
+@njit(cache=True)
+def _unlink_child(vertex, parent, first_child, next_sibling):
+    """Remove ``vertex`` from its parent's list of children."""
+    p = parent[vertex]
+    if first_child[p] == vertex:
+        first_child[p] = next_sibling[vertex]
+        return
+    c = first_child[p]
+    while next_sibling[c] != vertex:
+        c = next_sibling[c]
+    next_sibling[c] = next_sibling[vertex]
+
+
+@njit(cache=True, inline="always")
+def _link_child(vertex, new_parent, parent, first_child, next_sibling):
+    parent[vertex] = new_parent
+    next_sibling[vertex] = first_child[new_parent]
+    first_child[new_parent] = vertex
+
+
+@njit(cache=True)
+def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack):
+    """Add ``delta`` metres to the cost of every descendant of ``root`` (not root)."""
+    top = 0
+    c = first_child[root]
+    while c >= 0:
+        stack[top] = c
+        top += 1
+        c = next_sibling[c]
+    while top > 0:
+        top -= 1
+        v = stack[top]
+        cost[v] += delta
+        c = first_child[v]
+        while c >= 0:
+            stack[top] = c
+            top += 1
+            c = next_sibling[c]
+
+
+@njit(cache=True)
+def _update_best(goal, nodes, cost, goal_vertices, counts, best):
+    """Recompute the best solution over the goal set; True when it got shorter."""
+    improved = False
+    for g in range(counts[GOAL_VERTICES]):
+        v = goal_vertices[g]
+        total = cost[v] + _norm(nodes[v], goal)
+        if total < best[BEST_COST]:
+            best[BEST_COST], best[BEST_VERTEX] = total, v
+            improved = True
+    return improved
+
+
+@njit(cache=True)
+def _try_goal(vertex, goal, goal_tolerance, nodes, grid, goal_vertices, counts):
+    """Add ``vertex`` to the goal set if it reaches the goal by a free straight segment."""
+    if _norm(nodes[vertex], goal) <= goal_tolerance and grid_segment_free(nodes[vertex], goal,
+                                                                          grid):
+        goal_vertices[counts[GOAL_VERTICES]] = vertex
+        counts[GOAL_VERTICES] += 1
+
+
+@njit(cache=True)
+def start_tree(start, goal, goal_tolerance, grid, nodes, cost, parent, first_child,
+               next_sibling, origin, extent, node_grid, goal_vertices, counts, best):
+    """Make ``start`` the root (vertex 0) and check whether it reaches the goal at once."""
+    heads, next_in_cell, shape, inverse_cell = node_grid
+    nodes[0] = start
+    cost[0] = 0.0
+    parent[0] = -1
+    first_child[0] = -1
+    next_sibling[0] = -1
+    counts[NODES] = 1
+    insert(0, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
+    _try_goal(0, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
+    _update_best(goal, nodes, cost, goal_vertices, counts, best)
+
+
+@njit(cache=True)
+def grow(rng, iterations, stop_on_solution, start, goal, settings, rotation, grid, nodes,
+         cost, parent, first_child, next_sibling, origin, extent, node_grid, goal_vertices,
+         counts, best, near, near_distance, near_order, stack):
+    """Run up to ``iterations`` RRT* iterations; returns early when ``stop_on_solution``
+    and a solution exists. Capacity for ``iterations`` more vertices must be free.
+
+    ``settings`` is (step m, goal bias, goal tolerance m, rewire factor, informed 0/1).
+    """
+    heads, next_in_cell, shape, inverse_cell = node_grid
+    step, goal_bias, goal_tolerance, rewire_factor, informed = (
+        settings[0], settings[1], settings[2], settings[3], settings[4])
+    box = extent[0] * extent[1] * extent[2]
+    focal = _norm(start, goal)
+    sample = np.empty(3)
+    new = np.empty(3)
+    for _ in range(iterations):
+        if stop_on_solution and best[BEST_VERTEX] >= 0:
+            return
+        counts[ITERATIONS] += 1
+        n = counts[NODES]
+        if rng.random() < goal_bias:
+            sample[:] = goal
+        elif informed > 0 and best[BEST_VERTEX] >= 0:
+            _informed_sample(rng, best[BEST_COST], start, goal, rotation, origin, extent,
+                             sample)
+        else:
+            _box_sample(rng, origin, extent, sample)
+        closest = nearest(sample, nodes, n, origin, heads, next_in_cell, shape, inverse_cell)
+        distance = _norm(sample, nodes[closest])
+        if distance == 0.0:
+            continue
+        reach = min(1.0, step / distance)
+        for a in range(3):
+            new[a] = nodes[closest, a] + reach * (sample[a] - nodes[closest, a])
+        if not grid_segment_free(nodes[closest], new, grid):
+            continue
+        volume = box
+        if informed > 0 and best[BEST_VERTEX] >= 0:
+            volume = min(box, _ellipsoid_volume(best[BEST_COST], focal))
+        gamma = rewire_factor * (8.0 / 3.0 * volume / (4.0 / 3.0 * math.pi)) ** (1.0 / 3.0)
+        radius = min(gamma * (math.log(n + 1) / (n + 1)) ** (1.0 / 3.0), step)
+        m = within(new, radius, nodes, n, origin, heads, next_in_cell, shape, inverse_cell,
+                   near, near_distance)
+        # Choose the parent: cheapest cost-to-come first; the nearest vertex is known free.
+        best_parent = closest
+        best_cost = cost[closest] + _norm(nodes[closest], new)
+        for k in range(m):
+            near_order[k] = cost[near[k]] + near_distance[k]
+        order = np.argsort(near_order[:m])
+        checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 free, 2 blocked
+        for k in order:
+            if near_order[k] >= best_cost:
+                break
+            if grid_segment_free(nodes[near[k]], new, grid):
+                best_parent, best_cost = near[k], near_order[k]
+                checked[k] = 1
+                break
+            checked[k] = 2
+        v = n
+        nodes[v] = new
+        cost[v] = best_cost
+        first_child[v] = -1
+        _link_child(v, best_parent, parent, first_child, next_sibling)
+        counts[NODES] = n + 1
+        insert(v, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
+        # Rewire the near vertices that get cheaper through the new one.
+        rewired = False
+        for k in range(m):
+            u = near[k]
+            through = best_cost + near_distance[k]
+            if u == best_parent or through >= cost[u] - _REWIRE_EPS or checked[k] == 2:
+                continue
+            if checked[k] == 1 or grid_segment_free(new, nodes[u], grid):
+                _unlink_child(u, parent, first_child, next_sibling)
+                _link_child(u, v, parent, first_child, next_sibling)
+                _shift_subtree_cost(u, through - cost[u], cost, first_child, next_sibling,
+                                    stack)
+                cost[u] = through
+                rewired = True
+        before = counts[GOAL_VERTICES]
+        _try_goal(v, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
+        if rewired or counts[GOAL_VERTICES] > before:
+            _update_best(goal, nodes, cost, goal_vertices, counts, best)

@@ -1,0 +1,89 @@
+"""Settings shared by every planner, with defaults scaled to the map.
+
+One :class:`PlannerSettings` drives every planner; each uses the fields that apply to it
+(OMPL's RRT* uses ``step`` as its range and ``goal_bias``; PRM* ignores both).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from quadnav.errors import QuadnavError
+from quadnav.world.model import World
+
+#: Default wall-time budget of a search, s.
+DEFAULT_TIME_LIMIT = 1.0
+#: Default step as a fraction of the diagonal of the (inflated) boundary box.
+STEP_FRACTION = 0.05
+#: OMPL's default rewiring factor: the near radius is this times the smallest radius
+#: that keeps RRT* asymptotically optimal.
+DEFAULT_REWIRE_FACTOR = 1.1
+
+
+@dataclass(frozen=True)
+class PlannerSettings:
+    """How long and how a planner searches.
+
+    Attributes:
+        time_limit: wall-time budget of the search, s (> 0).
+        max_iterations: stop after this many samples (``None``: only the time limit).
+        seed: seed of every random choice; the same seed gives the same result.
+        stop_at_first: return as soon as a first solution is found.
+        step: largest edge a tree grows by in one iteration, metres (``None``: scaled to
+            the map, :data:`STEP_FRACTION` of the boundary diagonal).
+        goal_bias: probability of sampling the goal instead of a random point, in [0, 1).
+        goal_tolerance: a vertex this close to the goal, metres, is joined to it by a
+            straight segment when that segment is free (``None``: the step).
+        rewire_factor: multiplies the asymptotically optimal near radius
+            ``gamma * (log n / n)^(1/3)`` (which is then capped by the step); >= 1.
+        informed: after a first solution, sample only where a shorter path could pass
+            (the prolate ellipsoid with the start and goal as foci).
+    """
+
+    time_limit: float = DEFAULT_TIME_LIMIT
+    max_iterations: int | None = None
+    seed: int = 0
+    stop_at_first: bool = False
+    step: float | None = None
+    goal_bias: float = 0.05
+    goal_tolerance: float | None = None
+    rewire_factor: float = DEFAULT_REWIRE_FACTOR
+    informed: bool = True
+
+    def __post_init__(self) -> None:
+        checks = [
+            (math.isfinite(self.time_limit) and self.time_limit > 0,
+             f"time limit must be a positive number of seconds, got {self.time_limit}"),
+            (self.max_iterations is None or self.max_iterations >= 1,
+             f"max iterations must be >= 1, got {self.max_iterations}"),
+            (self.step is None or (math.isfinite(self.step) and self.step > 0),
+             f"step must be a positive number of metres, got {self.step}"),
+            (0 <= self.goal_bias < 1, f"goal bias must be in [0, 1), got {self.goal_bias}"),
+            (self.goal_tolerance is None
+             or (math.isfinite(self.goal_tolerance) and self.goal_tolerance > 0),
+             f"goal tolerance must be a positive number of metres, got {self.goal_tolerance}"),
+            (math.isfinite(self.rewire_factor) and self.rewire_factor >= 1,
+             f"rewire factor must be >= 1, got {self.rewire_factor}"),
+            (0 <= self.seed < 2**63, f"seed must be in [0, 2^63), got {self.seed}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise QuadnavError(message)
+
+    def replace(self, **changes: object) -> PlannerSettings:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    def step_for(self, world: World) -> float:
+        """The step in metres for ``world``: the set one, else scaled to its boundary."""
+        if self.step is not None:
+            return self.step
+        return STEP_FRACTION * float(np.linalg.norm(world.extent))
+
+    def goal_tolerance_for(self, world: World) -> float:
+        """The goal tolerance in metres for ``world``: the set one, else the step."""
+        return self.goal_tolerance if self.goal_tolerance is not None else self.step_for(world)

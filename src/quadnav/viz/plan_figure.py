@@ -1,0 +1,45 @@
+"""The figure of a planning result: the world, the explored tree, the path in red."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+from quadnav.planning.problem import PlanningProblem
+from quadnav.planning.result import PlanResult
+from quadnav.viz.map3d import draw_world
+
+#: Tree edges drawn at most; a larger tree is thinned to an evenly spread subset.
+MAX_TREE_EDGES = 20_000
+TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
+PATH_COLOR = "red"
+
+
+def plan_figure(problem: PlanningProblem, result: PlanResult) -> Figure:
+    """The world with the explored tree in a light colour, the path in red, start and
+    goal spheres; the title gives the planner, length and search statistics."""
+    fig = plt.figure(figsize=(9, 7), dpi=120)
+    ax = fig.add_subplot(projection="3d")
+    handles = draw_world(ax, problem.world, problem.start, problem.goal)
+    edges = result.tree_edges()
+    if len(edges):
+        shown = edges[np.linspace(0, len(edges) - 1, min(len(edges), MAX_TREE_EDGES)).astype(int)]
+        ax.add_collection3d(Line3DCollection(shown, colors=[TREE_COLOR], linewidths=0.4,
+                                             zorder=5))
+        label = f"tree ({len(edges):,} edges" + (
+            f", {len(shown):,} drawn)" if len(shown) < len(edges) else ")")
+        handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))
+    if result.solved:
+        ax.plot(*result.path.T, color=PATH_COLOR, linewidth=2.2, zorder=20)
+        handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.2,
+                              label=f"path ({result.length:.2f} m)"))
+    ax.view_init(elev=30, azim=-60)
+    ax.legend(handles=handles, loc="upper left", fontsize=8)
+    outcome = f"{result.length:.2f} m" if result.solved else "no path"
+    ax.set_title(f"{problem.world.name}\n{result.planner}, seed {result.seed}: {outcome}, "
+                 f"{result.stats.nodes:,} nodes in {result.stats.seconds:.2f} s", fontsize=9)
+    fig.tight_layout()
+    return fig
