@@ -155,7 +155,7 @@ def test_goal_near_a_block_leaves_the_margin_without_touching_the_block():
     with pytest.warns(PlanningWarning, match="goal"):
         problem = make_problem(world, [1.0, 5.0, 1.0], [6.1, 5.0, 1.0], 0.2)
     assert problem.search_goal == pytest.approx([6.2, 5.0, 1.0], abs=1e-5)
-    assert world.replace(boundary=BOUNDARY + [-1, -1, -1, 1, 1, 1]).segment_free(
+    assert world.replace(boundary=BOUNDARY + np.repeat([-1.0, 1.0], 3)).segment_free(
         problem.goal, problem.search_goal)
     assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, time_limit=0.3)))
 
@@ -180,7 +180,7 @@ def test_start_in_a_block_or_outside_is_an_error_naming_it(point, expected):
 
 def test_provably_disconnected_start_and_goal_are_reported(shared_maps):
     world = load_world(shared_maps / "meam620" / "test_impossible.json")
-    with pytest.raises(QuadnavError, match="disconnected with a 0.1 m margin: no path exists"):
+    with pytest.raises(QuadnavError, match=r"disconnected with a 0\.1 m margin: no path exists"):
         make_problem(world, None, None, world.margin)
 
 

@@ -7,7 +7,7 @@ import pytest
 from numba import njit
 
 from quadnav.planning.nodegrid import insert, nearest, new_node_grid, within
-from quadnav.world import World, geometry, load_world
+from quadnav.world import World, load_world
 from quadnav.world.blockgrid import build_block_grid, grid_point_free, grid_segment_free
 
 

@@ -37,9 +37,9 @@ def new_node_grid(capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np
 @njit(cache=True, inline="always")
 def _cell_of(point, origin, inverse_cell, shape):
     """Cell coordinates (ix, iy, iz) of a point, clipped to the grid."""
-    ix = min(max(int(math.floor((point[0] - origin[0]) * inverse_cell)), 0), shape[0] - 1)
-    iy = min(max(int(math.floor((point[1] - origin[1]) * inverse_cell)), 0), shape[1] - 1)
-    iz = min(max(int(math.floor((point[2] - origin[2]) * inverse_cell)), 0), shape[2] - 1)
+    ix = min(max(math.floor((point[0] - origin[0]) * inverse_cell), 0), shape[0] - 1)
+    iy = min(max(math.floor((point[1] - origin[1]) * inverse_cell), 0), shape[1] - 1)
+    iz = min(max(math.floor((point[2] - origin[2]) * inverse_cell), 0), shape[2] - 1)
     return ix, iy, iz
 
 
@@ -58,9 +58,9 @@ def rebuild(nodes, count, origin, extent, heads, next_in_cell, shape, inverse_ce
     target = min(max(count, 1), heads.shape[0])
     edge = (volume / target) ** (1.0 / 3.0)
     while True:
-        nx = max(1, int(math.ceil(extent[0] / edge)))
-        ny = max(1, int(math.ceil(extent[1] / edge)))
-        nz = max(1, int(math.ceil(extent[2] / edge)))
+        nx = max(1, math.ceil(extent[0] / edge))
+        ny = max(1, math.ceil(extent[1] / edge))
+        nz = max(1, math.ceil(extent[2] / edge))
         if nx * ny * nz <= heads.shape[0]:
             break
         edge *= 1.1
@@ -158,7 +158,7 @@ def within(query, radius, nodes, count, origin, heads, next_in_cell, shape, inve
                 found[n], distances[n] = vertex, math.sqrt(d2)
                 n += 1
         return n
-    reach = int(math.ceil(radius * inverse_cell[0]))
+    reach = math.ceil(radius * inverse_cell[0])
     cx, cy, cz = _cell_of(query, origin, inverse_cell[0], shape)
     for iz in range(max(cz - reach, 0), min(cz + reach, shape[2] - 1) + 1):
         for iy in range(max(cy - reach, 0), min(cy + reach, shape[1] - 1) + 1):

@@ -57,7 +57,7 @@ def _box_sample(rng, lower, extent, out):
 
 @njit(cache=True)
 def _inside(point, lower, extent):
-    for a in range(3):
+    for a in range(3):  # noqa: SIM110 - numba compiles a loop, not all() over a generator
         if not (lower[a] <= point[a] <= lower[a] + extent[a]):
             return False
     return True

@@ -88,7 +88,7 @@ def _cell_index(points: np.ndarray, origin: np.ndarray, inverse_cell: np.ndarray
 
 @njit(cache=True, inline="always")
 def _clipped_cell(value, origin, inverse_cell, size, widen):
-    index = int(math.floor((value - origin) * inverse_cell + widen))
+    index = math.floor((value - origin) * inverse_cell + widen)
     return min(max(index, 0), size - 1)
 
 
@@ -116,7 +116,7 @@ def grid_segment_free(p, q, grid) -> bool:
     cells_along = 0.0
     for a in range(3):
         cells_along = max(cells_along, abs(d[a]) * inverse_cell[a])
-    pieces = max(1, int(math.ceil(cells_along)))
+    pieces = max(1, math.ceil(cells_along))
     inverse, parallel = _inverses(d)
     for k in range(pieces):
         t0 = k / pieces
