@@ -20,7 +20,7 @@ def read_path(folder) -> np.ndarray:
 
 def test_plan_writes_path_stats_and_figure(tmp_path):
     out = tmp_path / "out"
-    result = run("plan", "forest", "--time", "0.3", "--seed", "4", "--quiet", "-o", out)
+    result = run("plan", "forest", "--iterations", "20000", "--time", "60", "--seed", "4", "--quiet", "-o", out)
     assert result.returncode == 0, result.stderr
     world = load_world("forest")
     path = read_path(out)
@@ -44,7 +44,7 @@ def test_same_seed_same_path_file(tmp_path):
 
 
 def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):
-    assert run("plan", "maze", "--time", "0.2", "--quiet", "-o", tmp_path).returncode == 0
+    assert run("plan", "maze", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path).returncode == 0
     result = run("plan", "maze", "--iterations", "3", "--quiet", "-o", tmp_path)
     assert result.returncode == 1
     assert "no path found in 3 iterations" in result.stderr
@@ -54,7 +54,7 @@ def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):
 
 def test_start_in_the_margin_warns_and_plans(tmp_path, shared_maps):
     result = run("plan", shared_maps / "rbe595" / "map1.txt", "--start", "0", "-5", "0",
-                 "--goal", "8", "18", "3", "--time", "0.3", "--quiet", "-o", tmp_path)
+                 "--goal", "8", "18", "3", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path)
     assert result.returncode == 0, result.stderr
     assert "warning: start (0, -5, 0) is inside the safety margin" in result.stderr
     assert np.array_equal(read_path(tmp_path)[0], [0.0, -5.0, 0.0])

@@ -81,7 +81,7 @@ def test_every_path_is_free_and_exact_in_random_worlds(query):
 def test_builtin_worlds_are_solved(spec):
     world = load_world(spec)
     problem = make_problem(world, None, None, world.margin)
-    result = plan(problem, PlannerSettings(seed=1, time_limit=0.3))
+    result = plan(problem, PlannerSettings(seed=1, max_iterations=20000, time_limit=60))
     assert_valid_path(problem, result)
     assert_valid_tree(problem, result)
     stats = result.stats
@@ -134,7 +134,7 @@ def test_no_path_within_the_budget_is_a_clear_result():
 def test_map1_from_the_course_is_solved(shared_maps):
     world = load_world(shared_maps / "rbe595" / "map1.txt")
     problem = make_problem(world, [0.5, -4.5, 0.5], [8, 18, 3], 0.2)
-    result = plan(problem, PlannerSettings(seed=0, time_limit=0.3))
+    result = plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60))
     assert_valid_path(problem, result)
     assert result.length < 30  # the shortest route over the walls is about 24 m
 
@@ -145,7 +145,7 @@ def test_start_on_the_boundary_leaves_the_margin_by_a_short_leg(shared_maps):
         problem = make_problem(world, [0.0, -5.0, 0.0], [8, 18, 3], 0.2)
     assert problem.free_world.is_free(problem.search_start)
     assert np.linalg.norm(problem.search_start - problem.start) < 0.35  # sqrt(3) * 0.2
-    result = plan(problem, PlannerSettings(seed=0, time_limit=0.3))
+    result = plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60))
     assert_valid_path(problem, result)
     assert np.array_equal(result.path[1], problem.search_start)
 
@@ -157,7 +157,7 @@ def test_goal_near_a_block_leaves_the_margin_without_touching_the_block():
     assert problem.search_goal == pytest.approx([6.2, 5.0, 1.0], abs=1e-5)
     assert world.replace(boundary=BOUNDARY + np.repeat([-1.0, 1.0], 3)).segment_free(
         problem.goal, problem.search_goal)
-    assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, time_limit=0.3)))
+    assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60)))
 
 
 def test_free_start_and_goal_give_no_warning():
@@ -192,7 +192,7 @@ def test_a_gap_narrower_than_the_margin_disconnects():
     with pytest.raises(QuadnavError, match="disconnected"):
         make_problem(world, *ends, 0.2)
     problem = make_problem(world, *ends, 0.1)
-    assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, time_limit=2)))
+    assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, max_iterations=50000, time_limit=60)))
 
 
 def test_map_without_start_needs_one():

@@ -121,6 +121,7 @@ def _load_kernels() -> None:
     problem = PlanningProblem(world, 0.0, world, *[np.array([0.1, 0.1, 0.1])] * 2,
                               *[np.array([0.9, 0.9, 0.9])] * 2)
     _search(problem, PlannerSettings(max_iterations=200, seed=0), None)
+    TreeState.empty(1).grown(1, 2, world.lower, world.extent)
 
 
 def plan_rrtstar(problem: PlanningProblem, settings: PlannerSettings,
