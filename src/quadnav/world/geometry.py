@@ -85,30 +85,6 @@ def _strictly_inside(x, y, z, boundary) -> bool:
 
 
 @njit(cache=True)
-def segment_free(p, q, bt, boundary) -> bool:
-    """Whether the closed segment p -> q (each (3,)) lies in open free space (serial)."""
-    if not (_strictly_inside(p[0], p[1], p[2], boundary)
-            and _strictly_inside(q[0], q[1], q[2], boundary)):
-        return False
-    inverse, parallel = _inverses(q - p)
-    for i in range(bt.shape[1]):
-        t_enter, t_exit = _slab_entry_exit(p, inverse, parallel, bt, i)
-        if max(t_enter, 0.0) <= min(t_exit, 1.0):
-            return False
-    return True
-
-
-@njit(cache=True, parallel=True)
-def segments_free(segments, bt, boundary):
-    """Batch segment check: ``segments`` (N, 2, 3) -> bool (N,)."""
-    n = segments.shape[0]
-    out = np.empty(n, dtype=np.bool_)
-    for k in prange(n):
-        out[k] = segment_free(segments[k, 0], segments[k, 1], bt, boundary)
-    return out
-
-
-@njit(cache=True)
 def point_free(x, y, z, bt, boundary) -> bool:
     """Whether the point (x, y, z) lies in open free space (serial)."""
     if not _strictly_inside(x, y, z, boundary):

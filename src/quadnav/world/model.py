@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from quadnav.errors import QuadnavError
-from quadnav.world import geometry
+from quadnav.world import blockgrid, geometry
 
 FloatArray = NDArray[np.float64]
 
@@ -154,16 +154,20 @@ class World:
         x, y, z = np.asarray(point, dtype=np.float64)
         return geometry.point_free(x, y, z, self._blocks_by_coordinate, self.boundary)
 
+    @cached_property
+    def _block_grid(self) -> blockgrid.GridArrays:
+        """The blocks sorted into a uniform grid, for fast segment checks."""
+        return blockgrid.build_block_grid(self)
+
     def segments_free(self, segments: ArrayLike) -> NDArray[np.bool_]:
         """Whether each closed segment (N, 2, 3) lies wholly in free space -> bool (N,)."""
-        segs = _segments(segments)
-        return geometry.segments_free(segs, self._blocks_by_coordinate, self.boundary)
+        return blockgrid.grid_segments_free(_segments(segments), self._block_grid)
 
     def segment_free(self, start: ArrayLike, end: ArrayLike) -> bool:
         """Whether the closed segment start -> end (each (3,)) lies wholly in free space."""
-        p = np.asarray(start, dtype=np.float64)
-        q = np.asarray(end, dtype=np.float64)
-        return geometry.segment_free(p, q, self._blocks_by_coordinate, self.boundary)
+        p = np.array(start, dtype=np.float64)
+        q = np.array(end, dtype=np.float64)
+        return blockgrid.grid_segment_free(p, q, self._block_grid)
 
     def clearances(self, points: ArrayLike) -> FloatArray:
         """Signed clearance (N,) of points (N, 3), metres.
