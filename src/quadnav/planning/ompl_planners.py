@@ -132,6 +132,9 @@ def _space_information(world: World) -> ob.SpaceInformation:
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
     grid = world._block_grid
+    # Compile the checks (or load them from numba's cache) now, not inside a timed search.
+    grid_point_free(*world.lower, grid)
+    grid_segment_free(np.array(world.lower), np.array(world.upper), grid)
     si.setStateValidityChecker(lambda s: grid_point_free(s[0], s[1], s[2], grid))
     si.setMotionValidator(_ExactMotionValidator(si, world))
     si.setup()
