@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 import numpy as np
 
+from quadnav.errors import QuadnavError
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -20,6 +22,41 @@ def finite_float(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
     return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def natural(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
+
+
+def probability(text: str) -> float:
+    """argparse type: a number in [0, 1)."""
+    value = finite_float(text)
+    if not 0 <= value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {text!r}")
+    return value
+
+
+def output_folder(path: str) -> Path:
+    """The output folder ``path``; QuadnavError if a file is in the way."""
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise QuadnavError(f"{folder}: expected a folder for the output, found a file")
+    return folder
 
 
 def margin_value(text: str) -> float:

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from quadnav import __version__
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
+from quadnav.cli.traj_command import add_traj_command
 from quadnav.cli.worlds_command import add_worlds_command
 from quadnav.errors import QuadnavError
 
@@ -37,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     add_map_commands(commands)
     add_plan_command(commands)
+    add_traj_command(commands)
     add_worlds_command(commands)
     return parser
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from tqdm import tqdm
 
@@ -13,11 +12,13 @@ from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
     add_start_goal_arguments,
-    finite_float,
+    natural,
+    output_folder,
+    positive_float,
+    probability,
     resolve_margin,
     resolve_start_goal,
 )
-from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
 from quadnav.planning import PlannerSettings, get_planner, make_problem, planner_names
 from quadnav.planning.refine import refine
@@ -27,40 +28,6 @@ from quadnav.world import load_world
 
 #: Exit code when the search ends without a path (the input itself was fine).
 EXIT_NO_PATH = 1
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    value = finite_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
-
-
-def natural(text: str) -> int:
-    """argparse type: an integer >= 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
-    return value
-
-
-def probability(text: str) -> float:
-    """argparse type: a number in [0, 1)."""
-    value = finite_float(text)
-    if not 0 <= value < 1:
-        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {text!r}")
-    return value
-
-
-def _output_folder(path: str) -> Path:
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise QuadnavError(f"{folder}: expected a folder for the output, found a file")
-    return folder
 
 
 def settings_from(args: argparse.Namespace) -> PlannerSettings:
@@ -76,7 +43,7 @@ def plan(args: argparse.Namespace) -> int:
     from quadnav.viz.plan_figure import plan_figure
 
     planner = get_planner(args.planner)
-    folder = _output_folder(args.output)
+    folder = output_folder(args.output)
     settings = settings_from(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)

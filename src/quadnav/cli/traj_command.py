@@ -1,0 +1,102 @@
+"""``quadnav traj``: a trajectory through a path: CSV, MP.csv, JSON summary, figures."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from quadnav.cli.args import (
+    add_map_argument,
+    add_margin_argument,
+    output_folder,
+    positive_float,
+    resolve_margin,
+)
+from quadnav.files import atomic_output
+from quadnav.trajectory.export import mp_csv, trajectory_csv
+from quadnav.trajectory.feasibility import Limits, feasibility
+from quadnav.trajectory.generate import (
+    METHODS,
+    TrajectorySettings,
+    checking_world,
+    make_trajectory,
+    with_boundary_slack,
+)
+from quadnav.trajectory.model import YawMode
+from quadnav.trajectory.pathfile import read_path_csv
+from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
+from quadnav.world import load_world
+
+#: Default sample interval of the CSV outputs, s.
+DEFAULT_DT = 0.01
+
+
+def traj(args: argparse.Namespace) -> int:
+    """Make the trajectory, check it, and write the five output files."""
+    from quadnav.viz.figures import save_figure
+    from quadnav.viz.trajectory_figures import states_figure, trajectory_3d_figure
+
+    folder = output_folder(args.output)
+    settings = TrajectorySettings(method=args.method, v_max=args.vmax, a_max=args.amax,
+                                  corridor=args.corridor, optimize_times=args.optimize_times,
+                                  yaw=YawMode(args.yaw))
+    world = load_world(args.map)
+    path = read_path_csv(args.path)
+    margin = resolve_margin(args, world)
+    free_world, kept = checking_world(world, margin, path)
+    trajectory = make_trajectory(path, settings, free_world)
+    # Clearance to the real blocks; a path may start on the boundary itself.
+    limits = Limits(v_max=args.vmax, a_max=args.amax)
+    report = feasibility(trajectory, with_boundary_slack(world), limits, dt=args.dt)
+    summary = {
+        "map": world.name, "path": str(args.path), "method": trajectory.method,
+        "margin": margin, "margin_kept": kept, "duration": trajectory.duration,
+        "waypoints_in": len(path), "waypoints": len(trajectory.waypoints),
+        "segment_times": trajectory.segment_times.tolist(), "yaw": settings.yaw.value,
+        "info": trajectory.info, "feasibility": report.as_dict(),
+    }
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in (("trajectory.csv", trajectory_csv(trajectory, args.dt)),
+                       ("MP.csv", mp_csv(trajectory, args.dt)),
+                       ("trajectory.json", json.dumps(summary, indent=2) + "\n")):
+        with atomic_output(folder / name) as tmp:
+            tmp.write_text(text)
+    save_figure(trajectory_3d_figure(world, trajectory, path), folder / "trajectory.png")
+    save_figure(states_figure(trajectory, args.vmax, args.amax), folder / "states.png")
+    print(f"{world.name}: {trajectory.method} through {len(trajectory.waypoints)} waypoints "
+          f"({len(path)} in the path), {trajectory.duration:.2f} s")
+    print(report.summary())
+    print("wrote " + ", ".join(str(folder / n) for n in (
+        "trajectory.csv", "MP.csv", "trajectory.json", "trajectory.png", "states.png")))
+    return 0
+
+
+def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav traj`` on the top-level subparsers."""
+    p = subparsers.add_parser(
+        "traj", help="a smooth, timed trajectory through a path",
+        description="Turn a path (e.g. DIR/path.csv from quadnav plan) into a smooth, timed "
+                    "trajectory that stays in the map's free space, and write "
+                    "DIR/trajectory.csv, DIR/MP.csv (the course layout), DIR/trajectory.json "
+                    "(summary and feasibility), DIR/trajectory.png and DIR/states.png.")
+    add_map_argument(p)
+    p.add_argument("--path", required=True, metavar="CSV",
+                   help="waypoints: a CSV with header x,y,z (as quadnav plan writes)")
+    add_margin_argument(p)
+    p.add_argument("--method", choices=METHODS, default="minsnap",
+                   help="generator (default: minsnap)")
+    p.add_argument("--vmax", type=positive_float, default=DEFAULT_V_MAX, metavar="V",
+                   help=f"largest speed, m/s (default: {DEFAULT_V_MAX:g})")
+    p.add_argument("--amax", type=positive_float, default=DEFAULT_A_MAX, metavar="A",
+                   help=f"largest acceleration, m/s^2 (default: {DEFAULT_A_MAX:g})")
+    p.add_argument("--corridor", action="store_true",
+                   help="minsnap as a QP inside safe corridors around the path")
+    p.add_argument("--optimize-times", action="store_true",
+                   help="optimise segment times for total time plus snap (minsnap)")
+    p.add_argument("--yaw", choices=[m.value for m in YawMode], default="constant",
+                   help="yaw reference (default: constant)")
+    p.add_argument("--dt", type=positive_float, default=DEFAULT_DT, metavar="S",
+                   help=f"sample interval of the CSV files, s (default: {DEFAULT_DT:g})")
+    p.add_argument("-o", "--output", default="traj", metavar="DIR",
+                   help="folder to write into, created if needed (default: traj)")
+    p.set_defaults(handler=traj)

@@ -1,0 +1,197 @@
+"""Can a Tello-class quadrotor fly a trajectory? Peaks of speed, acceleration, jerk, thrust
+and tilt against :class:`Limits`, and the clearance left to the obstacles.
+
+The thrust a quadrotor needs is along ``a + g e_z`` (``a`` the acceleration, ``e_z`` up):
+its size over ``g`` is the thrust-to-weight ratio it must produce, and its angle from
+``e_z`` the tilt of the body. Everything is sampled every ``dt`` s and at every waypoint
+time, so a peak between samples can be missed by a little.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from quadnav.errors import QuadnavError
+from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.world.model import World
+
+#: Gravitational acceleration, m/s^2.
+GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What a Tello-class (80 g) quadrotor can fly; conservative indoor values.
+
+    The speed and acceleration limits are above the time allocation's defaults
+    (:data:`~quadnav.trajectory.timing.DEFAULT_V_MAX`, ``DEFAULT_A_MAX``) because a smooth
+    polynomial peaks above the trapezoidal profile those times assume (a rest-to-rest
+    quintic reaches 1.875 times its mean speed).
+
+    Attributes:
+        v_max: speed, m/s, > 0.
+        a_max: acceleration (size of the vector), m/s^2, > 0.
+        jerk_max: jerk (size), m/s^3, > 0, or ``None`` for no limit.
+        thrust_to_weight_max: largest thrust over weight the motors give, > 0.
+        tilt_max: largest tilt of the body from upright, rad, in (0, pi).
+    """
+
+    v_max: float = 2.0
+    a_max: float = 4.0
+    jerk_max: float | None = None
+    thrust_to_weight_max: float = 2.0
+    tilt_max: float = math.radians(35.0)
+
+    def __post_init__(self) -> None:
+        for name, value in dataclasses.asdict(self).items():
+            if value is None and name == "jerk_max":
+                continue
+            if not (math.isfinite(value) and value > 0):
+                raise QuadnavError(f"limit {name} must be a finite number > 0, got {value}")
+        if self.tilt_max >= math.pi:
+            raise QuadnavError(f"limit tilt_max must be below pi rad, got {self.tilt_max}")
+
+
+@dataclass(frozen=True)
+class Peak:
+    """An extreme value of a sampled quantity and the time it occurs, s."""
+
+    value: float
+    t: float
+
+    def as_dict(self) -> dict:
+        """``{"value": ..., "t": ...}``."""
+        return {"value": self.value, "t": self.t}
+
+
+class _Quantity(NamedTuple):
+    """How one peaked quantity is named, shown and limited."""
+
+    field: str
+    label: str
+    unit: str
+    shown: float  # display units per SI unit
+    limit: str  # the Limits attribute
+
+
+_QUANTITIES = (
+    _Quantity("max_speed", "speed", " m/s", 1.0, "v_max"),
+    _Quantity("max_acceleration", "acceleration", " m/s^2", 1.0, "a_max"),
+    _Quantity("max_jerk", "jerk", " m/s^3", 1.0, "jerk_max"),
+    _Quantity("max_thrust_to_weight", "thrust-to-weight ratio", "", 1.0,
+              "thrust_to_weight_max"),
+    _Quantity("max_tilt", "tilt", " deg", math.degrees(1.0), "tilt_max"),
+)
+
+
+@dataclass(frozen=True, eq=False)
+class FeasibilityReport:
+    """Peaks of a sampled trajectory against :class:`Limits`.
+
+    Attributes:
+        dt: sample interval, s (waypoint times are sampled too).
+        duration: length of the trajectory, s.
+        max_speed: largest speed, m/s.
+        max_acceleration: largest acceleration (size), m/s^2.
+        max_jerk: largest jerk (size), m/s^3 (at a waypoint, the value just after it).
+        max_thrust_to_weight: largest ``|a + g e_z| / g``.
+        max_tilt: largest angle between ``a + g e_z`` and ``e_z``, rad.
+        min_clearance: smallest clearance of the sampled positions in the world, m
+            (negative inside an obstacle), or ``None`` when no world was given.
+        limits: the limits checked.
+        world_name: the world's name, or ``None``.
+        violations: one line per exceeded limit, naming the quantity, value, limit and time.
+    """
+
+    dt: float
+    duration: float
+    max_speed: Peak
+    max_acceleration: Peak
+    max_jerk: Peak
+    max_thrust_to_weight: Peak
+    max_tilt: Peak
+    min_clearance: Peak | None
+    limits: Limits
+    world_name: str | None
+    violations: tuple[str, ...]
+
+    @property
+    def ok(self) -> bool:
+        """Whether no limit is exceeded and no sample touches an obstacle."""
+        return not self.violations
+
+    def as_dict(self) -> dict:
+        """A JSON-ready dict: SI units, the tilts in radians."""
+        peaks = {q.field: getattr(self, q.field).as_dict() for q in _QUANTITIES}
+        clearance = None if self.min_clearance is None else self.min_clearance.as_dict()
+        return {"ok": self.ok, "dt": self.dt, "duration": self.duration, **peaks,
+                "min_clearance": clearance, "world": self.world_name,
+                "limits": dataclasses.asdict(self.limits), "violations": list(self.violations)}
+
+    def summary(self) -> str:
+        """A few lines for people: each peak with its time and limit (tilt in degrees)."""
+        count = len(self.violations)
+        lines = ["feasible" if self.ok else f"NOT feasible: {count} violation{'s' * (count > 1)}"]
+        for q in _QUANTITIES:
+            peak, limit = getattr(self, q.field), getattr(self.limits, q.limit)
+            bound = "no limit" if limit is None else f"limit {limit * q.shown:.3g}{q.unit}"
+            lines.append(f"  max {q.label} {peak.value * q.shown:.3g}{q.unit} at "
+                         f"{peak.t:.2f} s ({bound})")
+        if self.min_clearance is not None:
+            lines.append(f"  min clearance {self.min_clearance.value:.3g} m at "
+                         f"{self.min_clearance.t:.2f} s in {self.world_name}")
+        lines.extend(f"  violation: {line}" for line in self.violations)
+        return "\n".join(lines)
+
+
+def _peak(values: FloatArray, t: FloatArray, largest: bool = True) -> Peak:
+    i = int(np.argmax(values) if largest else np.argmin(values))
+    return Peak(float(values[i]), float(t[i]))
+
+
+def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits | None = None,
+                dt: float = 0.01) -> FeasibilityReport:
+    """Check ``trajectory`` against ``limits`` and, given a world, its obstacles.
+
+    Args:
+        trajectory: the trajectory to check.
+        free_world: the world whose free space the trajectory must stay in (e.g. inflated
+            by the safety margin; a sample with clearance <= 0 is a violation), or ``None``.
+        limits: the vehicle's limits (default: :class:`Limits`).
+        dt: sample interval, s, > 0; the waypoint times are sampled as well.
+    """
+    if not (math.isfinite(dt) and dt > 0):
+        raise QuadnavError(f"sample interval dt must be a finite number > 0 s, got {dt}")
+    limits = limits or Limits()
+    t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
+    thrust = trajectory.acceleration(t) + np.array([0.0, 0.0, GRAVITY])
+    series = {
+        "max_speed": np.linalg.norm(trajectory.velocity(t), axis=1),
+        "max_acceleration": np.linalg.norm(trajectory.acceleration(t), axis=1),
+        "max_jerk": np.linalg.norm(trajectory.jerk(t), axis=1),
+        "max_thrust_to_weight": np.linalg.norm(thrust, axis=1) / GRAVITY,
+        "max_tilt": np.arctan2(np.hypot(thrust[:, 0], thrust[:, 1]), thrust[:, 2]),
+    }
+    peaks = {name: _peak(values, t) for name, values in series.items()}
+    violations = []
+    for q in _QUANTITIES:
+        peak, limit = peaks[q.field], getattr(limits, q.limit)
+        if limit is not None and peak.value > limit:
+            violations.append(f"{q.label} {peak.value * q.shown:.3g}{q.unit} exceeds the limit "
+                              f"{limit * q.shown:.3g}{q.unit} at t = {peak.t:.2f} s")
+    clearance = None
+    if free_world is not None:
+        clearance = _peak(free_world.clearances(trajectory.position(t)), t, largest=False)
+        if clearance.value <= 0:
+            violations.append(f"clearance {clearance.value:.3g} m is not above 0 m at "
+                              f"t = {clearance.t:.2f} s: the trajectory touches or enters "
+                              f"an obstacle of {free_world.name}")
+    return FeasibilityReport(dt=float(dt), duration=trajectory.duration, **peaks,
+                             min_clearance=clearance, limits=limits,
+                             world_name=None if free_world is None else free_world.name,
+                             violations=tuple(violations))

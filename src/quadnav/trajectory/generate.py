@@ -1,0 +1,214 @@
+"""From waypoints to a trajectory: pick a generator, allocate segment times, keep it free.
+
+:func:`make_trajectory` is the stage's one entry point: segment times from a trapezoidal
+speed profile (optionally optimised for total time plus snap), the chosen generator, safe
+corridors for the constrained minimum-snap QP, and — given a world — collision-aware
+refinement that adds waypoints until a dense exact check finds no collision.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.trajectory.collision import refine_until_free
+from quadnav.trajectory.corridor import safe_corridors
+from quadnav.trajectory.cubic import cubic_spline
+from quadnav.trajectory.minsnap import minimum_snap, minimum_snap_qp
+from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
+from quadnav.trajectory.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.timing import (
+    DEFAULT_A_MAX,
+    DEFAULT_V_MAX,
+    optimize_times,
+    trapezoidal_times,
+)
+from quadnav.world.model import World
+
+#: ``generator(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
+Generator = Callable[[FloatArray, FloatArray], Trajectory]
+#: Methods by name, in the order the command line lists them.
+METHODS = ("minsnap", "quintic", "quintic-c2", "cubic")
+#: Steps of the bisection that finds the margin a path itself keeps.
+_MARGIN_STEPS = 30
+#: Samples of a trajectory searched for its peak speed and acceleration.
+_PEAK_SAMPLES = 4000
+#: Extra stretch, relative, beyond what the sampled peaks ask for.
+_STRETCH_ALLOWANCE = 1e-3
+#: Widening of the checked boundary, metres, so a path may start on the boundary.
+_BOUNDARY_SLACK = 1e-9
+
+
+@dataclass(frozen=True)
+class TrajectorySettings:
+    """How to turn waypoints into a trajectory.
+
+    Attributes:
+        method: one of :data:`METHODS`.
+        v_max: largest speed, m/s: segment times come from a trapezoidal profile with it,
+            then all stretch alike until the trajectory's peak speed is within it.
+        a_max: largest acceleration, m/s^2, used the same way.
+        corridor: minimum snap as a QP kept inside safe corridors around the path
+            (``minsnap`` only).
+        optimize_times: re-allocate segment times to minimise snap cost plus
+            ``time_weight`` times the total time (``minsnap`` only).
+        time_weight: weight of the total time against the snap cost, m^2/s^8.
+        yaw: constant yaw, or facing the direction of travel.
+        spacing: largest distance between positions checked for collisions, m.
+        max_rounds: rounds of adding waypoints before giving up on a collision.
+    """
+
+    method: str = "minsnap"
+    v_max: float = DEFAULT_V_MAX
+    a_max: float = DEFAULT_A_MAX
+    corridor: bool = False
+    optimize_times: bool = False
+    time_weight: float = 10.0
+    yaw: YawMode = YawMode.CONSTANT
+    spacing: float = 0.02
+    max_rounds: int = 10
+
+    def __post_init__(self) -> None:
+        checks = [
+            (self.method in METHODS,
+             f"unknown trajectory method {self.method!r}; expected one of {', '.join(METHODS)}"),
+            (math.isfinite(self.v_max) and self.v_max > 0,
+             f"v_max must be a positive speed in m/s, got {self.v_max}"),
+            (math.isfinite(self.a_max) and self.a_max > 0,
+             f"a_max must be a positive acceleration in m/s^2, got {self.a_max}"),
+            (not (self.corridor or self.optimize_times) or self.method == "minsnap",
+             f"corridors and time optimisation need method minsnap, not {self.method!r}"),
+            (math.isfinite(self.time_weight) and self.time_weight > 0,
+             f"time weight must be > 0, got {self.time_weight}"),
+            (math.isfinite(self.spacing) and self.spacing > 0,
+             f"check spacing must be > 0 m, got {self.spacing}"),
+            (self.max_rounds >= 0, f"max rounds must be >= 0, got {self.max_rounds}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise QuadnavError(message)
+
+    def replace(self, **changes: object) -> TrajectorySettings:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+
+def _generator(settings: TrajectorySettings, free_world: World | None) -> Generator:
+    if settings.method == "quintic":
+        return lambda w, t: quintic_segments(w, t, settings.v_max)
+    if settings.method == "quintic-c2":
+        return quintic_c2
+    if settings.method == "cubic":
+        return cubic_spline
+    if not settings.corridor:
+        return minimum_snap
+    if free_world is None:
+        raise QuadnavError("corridors need a map to keep the trajectory in")
+
+    def in_corridors(waypoints: FloatArray, times: FloatArray) -> Trajectory:
+        corridor_waypoints, boxes = safe_corridors(free_world, waypoints)
+        if len(corridor_waypoints) != len(waypoints):  # refinement splits free boxes only
+            raise QuadnavError("safe corridors split a segment after the first allocation")
+        return minimum_snap_qp(waypoints, times, corridors=boxes)
+
+    return in_corridors
+
+
+def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = None,
+                    free_world: World | None = None) -> Trajectory:
+    """A trajectory through ``waypoints`` (N, 3), metres, passing each one exactly, at
+    rest at both ends, within the speed and acceleration limits of ``settings``.
+
+    Args:
+        waypoints: e.g. a planner's path; consecutive repeats are dropped.
+        settings: method, limits and options (defaults: minimum snap, Tello-class limits).
+        free_world: the map inflated by the margin the trajectory must keep; when given,
+            waypoints are added until a dense exact check finds no collision (see
+            :func:`quadnav.trajectory.collision.refine_until_free`), and corridors can be
+            used. Every waypoint segment must be free in it.
+    """
+    settings = settings or TrajectorySettings()
+    points = np.array(waypoints, dtype=np.float64).reshape(-1, 3)
+    points = points[np.concatenate([[True], np.any(np.diff(points, axis=0) != 0, axis=1)])]
+    if len(points) < 2:
+        raise QuadnavError(f"a trajectory needs at least 2 distinct waypoints, got {len(points)}")
+    if settings.corridor and free_world is not None:
+        points, _ = safe_corridors(free_world, points)
+    times = trapezoidal_times(points, settings.v_max, settings.a_max)
+    if settings.optimize_times:
+        times = optimize_times(times, lambda t: minimum_snap(points, t).info["cost"],
+                               settings.time_weight)
+    build = _generator(settings, free_world)
+
+    def fly(waypoints: FloatArray, segment_times: FloatArray) -> Trajectory:
+        if free_world is None:
+            return build(waypoints, segment_times)
+        return refine_until_free(free_world, waypoints, segment_times, build,
+                                 max_rounds=settings.max_rounds, spacing=settings.spacing)
+
+    trajectory = fly(points, times)
+    stretch = slow_down_factor(trajectory, settings.v_max, settings.a_max)
+    if stretch > 1.0:
+        trajectory = fly(trajectory.waypoints, stretch * trajectory.segment_times)
+    info = {**trajectory.info, "time_stretch": stretch}
+    return trajectory.replace(yaw_mode=settings.yaw, info=info)
+
+
+def slow_down_factor(trajectory: Trajectory, v_max: float, a_max: float) -> float:
+    """How much to stretch every segment time so the peak speed and acceleration, sampled
+    at :data:`_PEAK_SAMPLES` points, come within ``v_max`` m/s and ``a_max`` m/s^2 (>= 1).
+
+    Stretching time by k divides speeds by k and accelerations by k^2; the result is
+    raised by :data:`_STRETCH_ALLOWANCE` to cover peaks between samples.
+    """
+    t = np.linspace(0.0, trajectory.duration, _PEAK_SAMPLES)
+    speed = float(np.linalg.norm(trajectory.velocity(t), axis=1).max())
+    acceleration = float(np.linalg.norm(trajectory.acceleration(t), axis=1).max())
+    factor = max(speed / v_max, math.sqrt(acceleration / a_max))
+    return factor * (1.0 + _STRETCH_ALLOWANCE) if factor > 1.0 else 1.0
+
+
+def with_boundary_slack(world: World) -> World:
+    """``world`` with its boundary widened by :data:`_BOUNDARY_SLACK` metres, so a point on
+    the boundary itself counts as free."""
+    return world.replace(boundary=world.boundary + np.repeat([-_BOUNDARY_SLACK,
+                                                              _BOUNDARY_SLACK], 3))
+
+
+def checking_world(world: World, margin: float, waypoints: ArrayLike) -> tuple[World, float]:
+    """The world a trajectory through ``waypoints`` is checked against, and its margin.
+
+    That is ``world`` inflated by the largest margin, at most ``margin`` metres, in which
+    every waypoint segment is free; its boundary is widened by :data:`_BOUNDARY_SLACK` so
+    that a path starting on the boundary itself is not a collision. Warns when the margin
+    is below ``margin`` (a start or goal inside the margin); QuadnavError when a segment
+    touches a real block or leaves the boundary.
+    """
+    points = np.asarray(waypoints, dtype=np.float64)
+    segments = np.stack([points[:-1], points[1:]], axis=1)
+    slack = with_boundary_slack
+    blocked = np.flatnonzero(~slack(world).segments_free(segments))
+    if blocked.size:
+        bad = int(blocked[0])
+        raise QuadnavError(f"path segment {bad} from {points[bad].round(4).tolist()} to "
+                           f"{points[bad + 1].round(4).tolist()} collides with the map")
+    if slack(world.inflate(margin)).segments_free(segments).all():
+        return slack(world.inflate(margin)), margin
+    low, high = 0.0, margin
+    for _ in range(_MARGIN_STEPS):
+        middle = 0.5 * (low + high)
+        if slack(world.inflate(middle)).segments_free(segments).all():
+            low = middle
+        else:
+            high = middle
+    warnings.warn(f"the path comes within {low:.3f} m of an obstacle or the boundary (its "
+                  f"start or goal lies in the {margin:g} m margin); the trajectory is kept "
+                  f"{low:.3f} m clear", PlanningWarning, stacklevel=2)
+    return slack(world.inflate(low)), low

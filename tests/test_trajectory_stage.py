@@ -1,0 +1,128 @@
+"""make_trajectory: every method through real plans, collision-free, through every waypoint."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.planning import PlannerSettings, make_problem, plan
+from quadnav.planning.refine import refine
+from quadnav.trajectory.collision import first_collision
+from quadnav.trajectory.generate import (
+    METHODS,
+    TrajectorySettings,
+    checking_world,
+    make_trajectory,
+)
+from quadnav.trajectory.minsnap import minimum_snap
+from quadnav.trajectory.model import YawMode
+from quadnav.trajectory.timing import optimize_times, trapezoidal_times
+from quadnav.world import load_world
+
+
+def planned(spec: str, start=None, goal=None, margin: float = 0.2):
+    world = load_world(spec)
+    problem = make_problem(world, start, goal, margin)
+    result = plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60))
+    return world, refine(problem, result).path
+
+
+def contains_in_order(trajectory, points: np.ndarray) -> bool:
+    """Every point is one of the trajectory's waypoints, in order."""
+    rows = [np.flatnonzero(np.all(trajectory.waypoints == p, axis=1)) for p in points]
+    return all(r.size for r in rows) and np.all(np.diff([r[0] for r in rows]) > 0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("spec", ["forest", "window", "maze"])
+def test_every_method_is_free_and_passes_every_waypoint(spec, method):
+    world, path = planned(spec)
+    free_world, kept = checking_world(world, 0.2, path)
+    assert kept == 0.2
+    trajectory = make_trajectory(path, TrajectorySettings(method=method), free_world)
+    assert first_collision(trajectory, free_world) is None
+    assert contains_in_order(trajectory, path)
+    assert np.allclose(trajectory.position(trajectory.breaks), trajectory.waypoints, atol=1e-8)
+    assert np.allclose(trajectory.velocity([0.0, trajectory.duration]), 0.0, atol=1e-9)
+
+
+def test_corridor_qp_stays_free_and_within_the_limits():
+    world, path = planned("forest")
+    free_world, _ = checking_world(world, 0.2, path)
+    settings = TrajectorySettings(corridor=True, v_max=1.0, a_max=1.5)
+    trajectory = make_trajectory(path, settings, free_world)
+    assert first_collision(trajectory, free_world) is None
+    assert contains_in_order(trajectory, path)
+    t = np.linspace(0, trajectory.duration, 4000)
+    assert np.linalg.norm(trajectory.velocity(t), axis=1).max() <= 1.0 + 0.05
+
+
+def test_optimised_times_trade_snap_for_time():
+    _, path = planned("forest")
+    weight = 1e-3
+    start = trapezoidal_times(path, 1.0, 1.5)
+    optimised = optimize_times(start, lambda t: minimum_snap(path, t).info["cost"], weight)
+
+    def objective(times):
+        return minimum_snap(path, times).info["cost"] + weight * times.sum()
+
+    assert objective(optimised) < objective(start)
+    settings = TrajectorySettings(optimize_times=True, time_weight=weight)
+    trajectory = make_trajectory(path, settings)
+    t = np.linspace(0, trajectory.duration, 20000)
+    assert np.linalg.norm(trajectory.velocity(t), axis=1).max() <= settings.v_max
+
+
+def test_travel_yaw_faces_the_velocity():
+    _, path = planned("forest")
+    trajectory = make_trajectory(path, TrajectorySettings(yaw=YawMode.TRAVEL))
+    t = np.linspace(0.0, trajectory.duration, 500)
+    v = trajectory.velocity(t)
+    moving = np.hypot(v[:, 0], v[:, 1]) >= 0.05
+    assert 0.5 < moving.mean() < 1
+    assert np.allclose(trajectory.yaw(t)[moving], np.arctan2(v[moving, 1], v[moving, 0]))
+    chord = trajectory.waypoints[1] - trajectory.waypoints[0]
+    assert trajectory.yaw(0.0) == pytest.approx(np.arctan2(chord[1], chord[0]))
+
+
+def test_a_start_on_the_boundary_keeps_a_smaller_margin(shared_maps):
+    world, path = planned(str(shared_maps / "rbe595" / "map1.txt"), [0.0, -5.0, 0.0],
+                          [8.0, 18.0, 3.0])
+    with pytest.warns(PlanningWarning, match="the path comes within 0.000 m"):
+        free_world, kept = checking_world(world, 0.2, path)
+    assert kept < 1e-6
+    trajectory = make_trajectory(path, TrajectorySettings(), free_world)
+    assert np.array_equal(trajectory.position(0.0), [0.0, -5.0, 0.0])
+    assert first_collision(trajectory, free_world) is None
+
+
+def test_bad_settings_and_paths_are_user_errors():
+    world, path = planned("forest")
+    with pytest.raises(QuadnavError, match="unknown trajectory method 'spline'"):
+        TrajectorySettings(method="spline")
+    with pytest.raises(QuadnavError, match="need method minsnap"):
+        TrajectorySettings(method="cubic", corridor=True)
+    with pytest.raises(QuadnavError, match="v_max must be a positive speed"):
+        TrajectorySettings(v_max=0)
+    with pytest.raises(QuadnavError, match="at least 2 distinct waypoints"):
+        make_trajectory([path[0], path[0]])
+    through_trunk = np.array([world.start, world.blocks[0, :3] + 0.01, world.goal])
+    with pytest.raises(QuadnavError, match=r"path segment 0 .* collides with the map"):
+        checking_world(world, 0.2, through_trunk)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_the_result_keeps_within_the_speed_and_acceleration_limits(method):
+    _, path = planned("maze")
+    settings = TrajectorySettings(method=method, v_max=0.8, a_max=1.0)
+    trajectory = make_trajectory(path, settings)
+    t = np.linspace(0, trajectory.duration, 20000)
+    assert np.linalg.norm(trajectory.velocity(t), axis=1).max() <= 0.8
+    assert np.linalg.norm(trajectory.acceleration(t), axis=1).max() <= 1.0
+
+
+def test_trajectory_times_follow_the_trapezoid():
+    _, path = planned("window")
+    trajectory = minimum_snap(path, trapezoidal_times(path, 1.0, 1.5))
+    assert trajectory.duration == pytest.approx(trapezoidal_times(path, 1.0, 1.5).sum())
