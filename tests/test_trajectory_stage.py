@@ -87,8 +87,9 @@ def test_travel_yaw_faces_the_velocity():
 
 
 def test_a_start_on_the_boundary_keeps_a_smaller_margin(shared_maps):
-    world, path = planned(str(shared_maps / "rbe595" / "map1.txt"), [0.0, -5.0, 0.0],
-                          [8.0, 18.0, 3.0])
+    with pytest.warns(PlanningWarning, match=r"start \(0, -5, 0\) is inside the safety"):
+        world, path = planned(str(shared_maps / "rbe595" / "map1.txt"), [0.0, -5.0, 0.0],
+                              [8.0, 18.0, 3.0])
     with pytest.warns(PlanningWarning, match="the path comes within 0.000 m"):
         free_world, kept = checking_world(world, 0.2, path)
     assert kept < 1e-6

@@ -167,23 +167,27 @@ def minimum_snap_qp(waypoints: ArrayLike, times: ArrayLike, *,
     settings = clarabel.DefaultSettings()
     settings.verbose = False
 
-    columns, iterations, seconds = [], 0, 0.0
+    columns, iterations, seconds, statuses = [], 0, 0.0, []
     for axis, name in enumerate(AXES):
         solver = clarabel.DefaultSolver(P, np.zeros(P.shape[0]), constraints,
                                         np.concatenate([b[:, axis], h[:, axis]]), cones,
                                         settings)
         solution = solver.solve()
-        if solution.status != clarabel.SolverStatus.Solved:
+        # AlmostSolved: a solution to reduced accuracy, kept (callers check the result).
+        if solution.status not in (clarabel.SolverStatus.Solved,
+                                   clarabel.SolverStatus.AlmostSolved):
             raise QuadnavError(
                 f"minimum-snap QP not solved on the {name} axis (Clarabel: "
                 f"{solution.status}): corridors or limits too tight for the segment times; "
                 "allow more time or loosen them")
         columns.append(np.asarray(solution.x))
+        statuses.append(str(solution.status))
         iterations += solution.iterations
         seconds += solution.solve_time
     coefficients = np.stack(columns, axis=1).reshape(len(durations), 2 * SNAP, 3)
     coefficients[:, 0] += origin
     info = {"cost": polybasis.trajectory_cost(coefficients, durations, SNAP),
-            "solver": "clarabel", "status": "Solved", "iterations": iterations,
+            "solver": "clarabel", "status": ", ".join(sorted(set(statuses))),
+            "iterations": iterations,
             "solve_time": seconds, "continuity": SNAP, "inequalities": int(G.shape[0])}
     return polybasis.make_trajectory(coefficients, points, durations, METHODS[SNAP], info)
