@@ -9,7 +9,7 @@ walk (steps of 1-3 m in random directions), and a refined RRT* plan through the 
 On each it prints medians over repeated runs of the whole call of:
 
 * :func:`quadnav.trajectory.minsnap.minimum_snap` — the closed form (one sparse KKT solve);
-* :func:`quadnav.trajectory.minsnap.minimum_snap_qp` without inequalities (the same
+* :func:`quadnav.trajectory.minsnap_qp.minimum_snap_qp` without inequalities (the same
   problem as a Clarabel QP) and with corridors: each segment's bounding box grown by
   0.5 m, 20 samples per segment;
 * the baseline, measured in the same run on the same waypoints and times: the course
@@ -39,7 +39,8 @@ from scipy.optimize import OptimizeResult, minimize
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.trajectory import Trajectory, polybasis
-from quadnav.trajectory.minsnap import minimum_snap, minimum_snap_qp
+from quadnav.trajectory.minsnap import minimum_snap
+from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.world import load_world
 
 #: Waypoints of every case.

@@ -1,8 +1,42 @@
 """Trajectory stage: smooth, timed references through waypoints (a planner's path).
 
+* :func:`make_trajectory` with :class:`TrajectorySettings` — the stage's entry point.
 * :class:`Trajectory` — a piecewise polynomial per axis with a yaw reference.
+* Generators ``(waypoints (N, 3), segment times (N - 1,)) -> Trajectory``:
+  :func:`minimum_snap`, :func:`minimum_snap_qp`, :func:`quintic_segments`,
+  :func:`quintic_c2`, :func:`cubic_spline`.
+* :func:`feasibility` — peaks against a vehicle's :class:`Limits`.
 """
 
+from quadnav.trajectory.cubic import cubic_spline
+from quadnav.trajectory.feasibility import FeasibilityReport, Limits, feasibility
+from quadnav.trajectory.generate import (
+    METHODS,
+    TrajectorySettings,
+    checking_world,
+    make_trajectory,
+)
+from quadnav.trajectory.minsnap import minimum_snap, snap_cost
+from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import Samples, Trajectory, YawMode, ppoly_from_ascending
+from quadnav.trajectory.quintic import quintic_c2, quintic_segments
 
-__all__ = ["Samples", "Trajectory", "YawMode", "ppoly_from_ascending"]
+__all__ = [
+    "METHODS",
+    "FeasibilityReport",
+    "Limits",
+    "Samples",
+    "Trajectory",
+    "TrajectorySettings",
+    "YawMode",
+    "checking_world",
+    "cubic_spline",
+    "feasibility",
+    "make_trajectory",
+    "minimum_snap",
+    "minimum_snap_qp",
+    "ppoly_from_ascending",
+    "quintic_c2",
+    "quintic_segments",
+    "snap_cost",
+]

@@ -21,7 +21,8 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
-from quadnav.trajectory.minsnap import minimum_snap, minimum_snap_qp
+from quadnav.trajectory.minsnap import minimum_snap
+from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
 from quadnav.trajectory.quintic import quintic_c2, quintic_segments
 from quadnav.trajectory.timing import (

@@ -8,7 +8,7 @@ continuous derivatives 1..r at the interior waypoints (up to snap for ``r = 4``,
 optimum solves one sparse linear (KKT) system; it is in fact ``C^(2r - 2)`` (the natural
 conditions of the optimum make derivatives r+1..2r-2 continuous too). The matrices are
 those of :mod:`quadnav.trajectory.polybasis`; :mod:`quadnav.trajectory.minsnap_qp` adds
-corridors and limits; its :func:`minimum_snap_qp` is re-exported here.
+corridors and limits (:func:`~quadnav.trajectory.minsnap_qp.minimum_snap_qp`).
 """
 
 from __future__ import annotations
@@ -20,11 +20,10 @@ from scipy.sparse.linalg import splu
 
 from quadnav.errors import QuadnavError
 from quadnav.trajectory import polybasis
-from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polybasis import METHODS
 
-__all__ = ["METHODS", "minimum_derivative", "minimum_snap", "minimum_snap_qp", "snap_cost"]
+__all__ = ["METHODS", "minimum_derivative", "minimum_snap", "snap_cost"]
 
 
 def minimum_derivative(waypoints: ArrayLike, times: ArrayLike, derivative: int = 4
