@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Sequence
 
 from quadnav import __version__
+from quadnav.cli.kino_command import add_kino_command
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.traj_command import add_traj_command
@@ -39,6 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_map_commands(commands)
     add_plan_command(commands)
     add_traj_command(commands)
+    add_kino_command(commands)
     add_worlds_command(commands)
     return parser
 

@@ -1,0 +1,412 @@
+"""A differential-drive robot and its kinodynamic RRT: :class:`DiffDrive`, :func:`plan_diffdrive`.
+
+Model
+-----
+State ``(x, y, theta)``: the centre between the wheels (m) and the heading (rad, from +x
+towards +y, kept in ``[-pi, pi)``). Control ``(v, omega)``: forward speed of the centre
+(m/s) and turn rate (rad/s, positive turns left), held constant over each edge. The
+unicycle ``x' = v cos theta, y' = v sin theta, theta' = omega`` is integrated exactly
+(:func:`propagate`): the centre moves on a circular arc, or a straight line when
+``omega = 0``, with no integration error.
+
+The wheels sit at ``centre +/- (b/2) (-sin theta, cos theta)`` (``+``: left wheel), and
+roll at ``v - omega b/2`` (left) and ``v + omega b/2`` (right), m/s.
+
+Collision checking
+------------------
+The robot is a disc of :attr:`DiffDrive.radius`. Each motion is sampled at equal time
+steps so that every chord between consecutive samples deviates from the arc by at most
+:data:`CHORD_TOLERANCE` (:func:`segments_needed`); each chord is checked exactly
+against the world inflated by ``radius + margin + CHORD_TOLERANCE``. Every point of the
+arc is within the tolerance of a checked chord, so the whole disc swept along the arc
+stays clear of the obstacles inflated by ``margin`` (inflation by squares contains
+inflation by discs): edges are collision-free along their integrated motion, not just at
+their samples.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from quadnav.errors import QuadnavError
+from quadnav.kinodynamic.result import KinoResult
+from quadnav.kinodynamic.settings import KinoSettings
+from quadnav.kinodynamic.world2d import World2D, format_rect
+
+FloatArray = NDArray[np.float64]
+
+NAME = "diffdrive"
+#: Largest distance between a checked chord and the arc it stands for, metres.
+CHORD_TOLERANCE = 0.01
+#: Standard deviation of goal-biased samples per metre between the goal and the tree's
+#: closest state.
+GOAL_SPREAD = 0.5
+#: Wall time between two progress reports, s.
+PROGRESS_SECONDS = 0.1
+#: ``progress(fraction of the budget used in [0, 1], distance from the goal to the tree's
+#: closest state in metres)``.
+KinoProgress = Callable[[float, float], None]
+
+
+@dataclass(frozen=True)
+class DiffDrive:
+    """Geometry and limits of a differential-drive robot.
+
+    Attributes:
+        wheel_base: distance between the wheels ``b``, m, > 0.
+        v_min: lowest forward speed, m/s (negative: it may reverse).
+        v_max: highest forward speed, m/s, > ``v_min``.
+        omega_max: turn rate limit, rad/s, > 0: ``|omega| <= omega_max``.
+        radius: radius of the robot's footprint, m, >= 0; obstacles are inflated by it.
+    """
+
+    wheel_base: float = 0.3
+    v_min: float = -0.2
+    v_max: float = 1.0
+    omega_max: float = 1.5
+    radius: float = 0.2
+
+    def __post_init__(self) -> None:
+        values = (self.wheel_base, self.v_min, self.v_max, self.omega_max, self.radius)
+        checks = [
+            (all(math.isfinite(v) for v in values), "model parameters must be finite"),
+            (self.wheel_base > 0, f"wheel base must be > 0 m, got {self.wheel_base}"),
+            (self.v_min < self.v_max,
+             f"speed limits must have v_min < v_max, got {self.v_min} >= {self.v_max}"),
+            (self.omega_max > 0, f"turn rate limit must be > 0 rad/s, got {self.omega_max}"),
+            (self.radius >= 0, f"robot radius must be >= 0 m, got {self.radius}"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise QuadnavError(message)
+
+    def sample_controls(self, rng: np.random.Generator, n: int) -> FloatArray:
+        """``n`` controls (n, 2) ``(v, omega)`` drawn uniformly within the limits."""
+        return rng.uniform((self.v_min, -self.omega_max), (self.v_max, self.omega_max),
+                           size=(n, 2))
+
+    def wheel_speeds(self, controls: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Left and right wheel speeds, m/s, of controls (..., 2): ``v -/+ omega b/2``."""
+        c = np.asarray(controls, dtype=np.float64)
+        half_turn = 0.5 * self.wheel_base * c[..., 1]
+        return c[..., 0] - half_turn, c[..., 0] + half_turn
+
+    def wheel_positions(self, states: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Left and right wheel contact points (..., 2) of states (..., 3), metres."""
+        s = np.asarray(states, dtype=np.float64)
+        offset = 0.5 * self.wheel_base * np.stack([-np.sin(s[..., 2]), np.cos(s[..., 2])],
+                                                  axis=-1)
+        return s[..., :2] + offset, s[..., :2] - offset
+
+
+# ------------------------------------------------------------------ integration
+def wrap_angle(angle: ArrayLike) -> FloatArray:
+    """Angles (rad) wrapped into ``[-pi, pi)``."""
+    return np.mod(np.asarray(angle, dtype=np.float64) + np.pi, 2 * np.pi) - np.pi
+
+
+def propagate(states: ArrayLike, controls: ArrayLike, t: ArrayLike) -> FloatArray:
+    """Exact unicycle motion: the states reached by holding each control for ``t``.
+
+    ``x(t) = x + v t sinc(omega t / 2) cos(theta + omega t / 2)`` (likewise ``y`` with
+    ``sin``), ``theta(t) = theta + omega t`` wrapped into ``[-pi, pi)``, where
+    ``sinc(a) = sin(a) / a``: the closed-form arc, numerically stable as ``omega -> 0``
+    (no division by ``omega``).
+
+    Args:
+        states: (..., 3) ``(x, y, theta)``, m and rad.
+        controls: (..., 2) ``(v, omega)``, m/s and rad/s.
+        t: seconds, broadcast against the leading dimensions (a scalar, or e.g. (n,)).
+
+    Returns:
+        (..., 3) states after ``t``.
+    """
+    s = np.asarray(states, dtype=np.float64)
+    c = np.asarray(controls, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    turn = c[..., 1] * t
+    heading = s[..., 2] + 0.5 * turn
+    chord = c[..., 0] * t * np.sinc(turn / (2 * np.pi))  # np.sinc(u) = sin(pi u) / (pi u)
+    return np.stack([s[..., 0] + chord * np.cos(heading), s[..., 1] + chord * np.sin(heading),
+                     wrap_angle(s[..., 2] + turn)], axis=-1)
+
+
+def segments_needed(controls: ArrayLike, durations: ArrayLike, tolerance: float,
+                    reach: float = 0.0) -> NDArray[np.int64]:
+    """Equal time steps per motion so every chord stays within ``tolerance`` of its arc.
+
+    A point at distance ``r`` from the centre of turn moves on a circle; a chord across
+    an angle ``a <= pi`` of it deviates from the arc by at most the sagitta
+    ``r (1 - cos(a / 2)) = 2 r sin^2(a / 4)``. Points rigidly attached within ``reach``
+    metres of the robot's centre (e.g. the wheels, ``reach = b / 2``) turn on circles of
+    radius at most ``|v / omega| + reach``, so the step angle is kept below
+    ``4 arcsin(sqrt(tolerance / (2 (|v / omega| + reach))))`` and below ``pi``.
+
+    Args:
+        controls: (n, 2) ``(v, omega)``.
+        durations: (n,) or a scalar, seconds each control is held.
+        tolerance: largest chord-to-arc deviation, m, > 0.
+        reach: distance from the centre of the points that must be tracked too, m.
+
+    Returns:
+        (n,) number of chords, >= 1.
+    """
+    c = np.asarray(controls, dtype=np.float64).reshape(-1, 2)
+    speed, rate = np.abs(c[:, 0]), np.abs(c[:, 1])
+    angle = rate * np.asarray(durations, dtype=np.float64)
+    circle_speed = speed + reach * rate  # turn radius times the turn rate
+    ratio = np.divide(tolerance * rate, 2 * circle_speed, out=np.full_like(rate, np.inf),
+                      where=circle_speed > 0)
+    # Slightly smaller than the bound, so rounding in ceil() never gives too few steps.
+    step = 4 * np.arcsin(np.sqrt(np.minimum(ratio, 0.5))) * (1 - 1e-9)
+    count = np.divide(angle, step, out=np.ones_like(angle), where=step > 0)
+    return np.maximum(np.ceil(count), 1).astype(np.int64)
+
+
+def arc_samples(states: ArrayLike, controls: ArrayLike, durations: ArrayLike,
+                segments: int) -> FloatArray:
+    """States (n, segments + 1, 3) at equal time steps along each motion, both ends
+    included; the last is exactly ``propagate(states, controls, durations)``.
+
+    Args:
+        states: (n, 3) where each motion starts.
+        controls: (n, 2) ``(v, omega)`` held.
+        durations: (n,) or a scalar, seconds.
+        segments: time steps per motion, >= 1.
+    """
+    s = np.asarray(states, dtype=np.float64).reshape(-1, 3)
+    c = np.asarray(controls, dtype=np.float64).reshape(-1, 2)
+    fractions = np.arange(segments + 1) / segments
+    times = np.reshape(durations, (-1, 1)) * fractions
+    return propagate(s[:, None, :], c[:, None, :], times)
+
+
+def track(state: ArrayLike, control: ArrayLike, duration: float, tolerance: float,
+          reach: float = 0.0) -> FloatArray:
+    """Samples (k, 3) along one motion, both ends included, whose chords deviate from the
+    arc by at most ``tolerance`` metres (also for points up to ``reach`` m from the
+    centre; see :func:`segments_needed`)."""
+    count = int(segments_needed(np.reshape(control, (1, 2)), duration, tolerance, reach)[0])
+    return arc_samples(np.reshape(state, (1, 3)), np.reshape(control, (1, 2)), duration,
+                       count)[0]
+
+
+# ---------------------------------------------------------------------- planning
+def _check_end(world: World2D, free: World2D, point: FloatArray, label: str,
+               clearance: str) -> None:
+    """QuadnavError unless ``point`` (2,) is free in the inflated world ``free``."""
+    where = f"{world.name}: {label} ({point[0]:.4g}, {point[1]:.4g})"
+    if not world.in_boundary(point):
+        raise QuadnavError(f"{where} is outside the boundary {format_rect(world.boundary)}")
+    if free.is_free(point):
+        return
+    inside = free.rects_containing(point)
+    if inside.size:
+        rects = ", ".join(f"rect {i} {format_rect(world.rects[i])}" for i in inside)
+        raise QuadnavError(f"{where} is within {clearance} of {rects}")
+    raise QuadnavError(f"{where} is within {clearance} of the boundary")
+
+
+def check_query(world: World2D, start: ArrayLike, goal: ArrayLike, model: DiffDrive,
+                margin: float) -> tuple[World2D, FloatArray, FloatArray]:
+    """The world the search runs in, the start (3,) and the goal (2,), checked.
+
+    The search world is ``world`` inflated by ``radius + margin + CHORD_TOLERANCE``; a
+    start or goal outside the boundary or not free there is a QuadnavError naming it.
+    """
+    start = np.array(start, dtype=np.float64)
+    goal = np.array(goal, dtype=np.float64)
+    if start.shape != (3,) or not np.all(np.isfinite(start)):
+        raise QuadnavError(f"start: expected 3 finite numbers x y theta, got {start.tolist()}")
+    if goal.shape != (2,) or not np.all(np.isfinite(goal)):
+        raise QuadnavError(f"goal: expected 2 finite numbers x y, got {goal.tolist()}")
+    if not (math.isfinite(margin) and margin >= 0):
+        raise QuadnavError(f"margin must be >= 0 m, got {margin}")
+    free = world.inflate(model.radius + margin + CHORD_TOLERANCE)
+    clearance = (f"{model.radius + margin + CHORD_TOLERANCE:g} m (robot radius "
+                 f"{model.radius:g} m + margin {margin:g} m + tolerance {CHORD_TOLERANCE:g} m)")
+    _check_end(world, free, start[:2], "start", clearance)
+    _check_end(world, free, goal, "goal", clearance)
+    start[2] = wrap_angle(start[2])
+    return free, start, goal
+
+
+class _Tree:
+    """Preallocated tree arrays; row 0 is the start."""
+
+    def __init__(self, start: FloatArray, capacity: int) -> None:
+        self.states = np.zeros((capacity, 3))
+        self.parents = np.full(capacity, -1, dtype=np.int64)
+        self.controls = np.zeros((capacity, 2))
+        self.durations = np.zeros(capacity)
+        self.states[0] = start
+        self.count = 1
+
+    def add(self, parent: int, control: FloatArray, duration: float, state: FloatArray
+            ) -> int:
+        i = self.count
+        self.states[i], self.parents[i] = state, parent
+        self.controls[i], self.durations[i] = control, duration
+        self.count += 1
+        return i
+
+    def branch(self, node: int) -> list[int]:
+        """Rows from the start to ``node``."""
+        rows = [node]
+        while self.parents[rows[-1]] >= 0:
+            rows.append(int(self.parents[rows[-1]]))
+        return rows[::-1]
+
+
+def _sample_target(rng: np.random.Generator, settings: KinoSettings, free: World2D,
+                   goal: FloatArray, closest: float) -> FloatArray:
+    """The point (2,) the tree grows towards: with ``settings.biased``, with probability
+    ``goal_bias`` a Gaussian around the goal of standard deviation ``GOAL_SPREAD`` times
+    the distance from the goal to the closest tree state; otherwise uniform in the
+    boundary."""
+    if settings.biased and rng.random() < settings.goal_bias:
+        return goal + rng.normal(0.0, GOAL_SPREAD * closest, size=2)
+    return rng.uniform(free.lower, free.upper)
+
+
+def _extend(free: World2D, state: FloatArray, controls: FloatArray, duration: float
+            ) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """End states (n, 3) of the controls (n, 2) held from ``state`` for ``duration``, and
+    whether each motion is collision-free (all chords checked in one batch)."""
+    n = len(controls)
+    count = int(segments_needed(controls, duration, CHORD_TOLERANCE).max())
+    samples = arc_samples(np.broadcast_to(state, (n, 3)), controls, duration, count)
+    xy = samples[..., :2]
+    chords = np.stack([xy[:, :-1], xy[:, 1:]], axis=2).reshape(-1, 2, 2)
+    free_motion = free.segments_free(chords).reshape(n, count).all(axis=1)
+    return samples[:, -1], free_motion
+
+
+def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: KinoSettings,
+                   model: DiffDrive | None = None, margin: float = 0.0,
+                   progress: KinoProgress | None = None) -> KinoResult:
+    """Kinodynamic RRT for a differential-drive robot.
+
+    Each iteration draws a target point (:func:`_sample_target`), takes the tree state
+    nearest it in (x, y), samples ``settings.controls_per_extension`` controls within the
+    model's limits, integrates each for ``settings.duration`` exactly, drops those whose
+    motion collides, and adds the end nearest the target. The search stops when a state
+    lies within ``settings.goal_radius`` of the goal or the iteration or time budget ends.
+
+    Args:
+        world: the map, rectangles not inflated.
+        start: (3,) ``(x, y, theta)``, m and rad.
+        goal: (2,) ``(x, y)`` centre of the goal region, m.
+        settings: budgets, seed, sampling.
+        model: the robot; ``None``: :class:`DiffDrive` defaults.
+        margin: safety margin kept around the robot's footprint, m, >= 0.
+        progress: called about every :data:`PROGRESS_SECONDS` (see :data:`KinoProgress`).
+
+    Returns:
+        A :class:`KinoResult` named ``"diffdrive"``: states (K, 3), controls (K - 1, 2)
+        ``(v, omega)``, durations (K - 1,), and the whole tree.
+    """
+    model = model or DiffDrive()
+    clock = time.perf_counter()
+    free, start, goal = check_query(world, start, goal, model, margin)
+    rng = np.random.default_rng(settings.seed)
+    tree = _Tree(start, settings.max_iterations + 1)
+    closest = float(np.hypot(*(start[:2] - goal)))
+    reached = 0 if closest <= settings.goal_radius else -1
+    iterations, reported = 0, 0.0
+    elapsed = time.perf_counter() - clock
+    while reached < 0 and iterations < settings.max_iterations and elapsed < settings.time_limit:
+        iterations += 1
+        target = _sample_target(rng, settings, free, goal, closest)
+        gaps = tree.states[:tree.count, :2] - target
+        near = int(np.argmin(np.einsum("ij,ij->i", gaps, gaps)))
+        controls = model.sample_controls(rng, settings.controls_per_extension)
+        ends, ok = _extend(free, tree.states[near], controls, settings.duration)
+        if ok.any():
+            candidates = np.flatnonzero(ok)
+            best = candidates[np.argmin(np.hypot(*(ends[candidates, :2] - target).T))]
+            node = tree.add(near, controls[best], settings.duration, ends[best])
+            distance = float(np.hypot(*(ends[best, :2] - goal)))
+            closest = min(closest, distance)
+            if distance <= settings.goal_radius:
+                reached = node
+        elapsed = time.perf_counter() - clock
+        if progress is not None and elapsed - reported >= PROGRESS_SECONDS:
+            reported = elapsed
+            progress(_budget_used(settings, iterations, elapsed), closest)
+    if progress is not None:
+        progress(1.0 if reached < 0 else _budget_used(settings, iterations, elapsed), closest)
+    return _result(tree, reached, settings, iterations, time.perf_counter() - clock, closest)
+
+
+def _budget_used(settings: KinoSettings, iterations: int, elapsed: float) -> float:
+    return min(max(iterations / settings.max_iterations, elapsed / settings.time_limit), 1.0)
+
+
+def _result(tree: _Tree, reached: int, settings: KinoSettings, iterations: int,
+            seconds: float, closest: float) -> KinoResult:
+    n = tree.count
+    whole = (tree.states[:n].copy(), tree.parents[:n].copy(), tree.controls[:n].copy(),
+             tree.durations[:n].copy())
+    if reached < 0:
+        return KinoResult(NAME, False, np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0),
+                          *whole, iterations, seconds, None, settings.seed,
+                          f"goal region not reached in {iterations} iterations "
+                          f"({seconds:.3g} s); the closest state is {closest:.3g} m from the "
+                          "goal")
+    rows = tree.branch(reached)
+    return KinoResult(NAME, True, tree.states[rows], tree.controls[rows[1:]],
+                      tree.durations[rows[1:]], *whole, iterations, seconds, seconds,
+                      settings.seed, f"goal region reached in {iterations} iterations "
+                      f"({seconds:.3g} s), {len(rows) - 1} controls")
+
+
+# ------------------------------------------------------------------------ outputs
+def wheel_tracks(result: KinoResult, model: DiffDrive, tolerance: float = CHORD_TOLERANCE
+                 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The centre and wheel paths along the plan's integrated motion.
+
+    Every chord of the three polylines deviates from the true curve by at most
+    ``tolerance`` metres.
+
+    Returns:
+        ``(centre (n, 2), left (n, 2), right (n, 2), t (n,))``: positions in metres at
+        times ``t`` in seconds from the start; empty when the plan is not solved.
+    """
+    if len(result.states) == 0:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0)
+    pieces, times = [result.states[:1]], [np.zeros(1)]
+    starts = np.concatenate([[0.0], np.cumsum(result.durations)])
+    for state, control, duration, t0 in zip(result.states[:-1], result.controls,
+                                            result.durations, starts[:-1], strict=True):
+        samples = track(state, control, duration, tolerance, reach=0.5 * model.wheel_base)
+        steps = len(samples) - 1
+        pieces.append(samples[1:])
+        times.append(t0 + duration * (np.arange(1, steps + 1) / steps))
+    states = np.concatenate(pieces)
+    left, right = model.wheel_positions(states)
+    return states[:, :2], left, right, np.concatenate(times)
+
+
+def control_profile(result: KinoResult, model: DiffDrive
+                    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The plan's controls against time, as piecewise-constant profiles.
+
+    Each control gives two samples, at the start and at the end of the interval it is
+    held, so plotting ``t`` against a value draws the steps.
+
+    Returns:
+        ``(t, v, omega, left_speed, right_speed)``, each (2 (K - 1),): seconds, m/s,
+        rad/s, m/s, m/s.
+    """
+    ends = np.cumsum(result.durations)
+    t = np.column_stack([ends - result.durations, ends]).ravel()
+    controls = np.repeat(result.controls, 2, axis=0)
+    left, right = model.wheel_speeds(controls)
+    return t, controls[:, 0], controls[:, 1], left, right

@@ -1,0 +1,136 @@
+"""Figures of differential-drive plans: the tree as integrated arcs, the centre path and
+the wheel tracks, the control profiles, and biased against unbiased sampling.
+
+Tree edges are drawn as the arcs the robot would drive (not as straight lines between
+states), lightly; the centre path in red; the left and right wheel tracks thin beside it.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection, PatchCollection
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Rectangle
+from numpy.typing import ArrayLike
+
+from quadnav.kinodynamic.diffdrive import (
+    DiffDrive,
+    arc_samples,
+    control_profile,
+    wheel_tracks,
+)
+from quadnav.kinodynamic.result import KinoResult
+from quadnav.kinodynamic.world2d import World2D
+from quadnav.viz.map3d import GOAL_COLOR, START_COLOR
+
+#: Tree edges drawn at most; a larger tree is thinned to an evenly spread subset.
+MAX_TREE_EDGES = 20_000
+#: Chords each tree edge is drawn with.
+TREE_EDGE_CHORDS = 8
+TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
+PATH_COLOR = "red"
+LEFT_COLOR = "tab:purple"
+RIGHT_COLOR = "tab:orange"
+RECT_COLOR = (0.6, 0.6, 0.6)
+
+
+def draw_world2d(ax: Axes, world: World2D) -> None:
+    """Rectangles filled grey and the boundary outlined, axes in metres, equal scale."""
+    rects = [Rectangle(r[:2], *(r[2:] - r[:2])) for r in world.rects]
+    ax.add_collection(PatchCollection(rects, facecolor=RECT_COLOR, edgecolor=(0, 0, 0, 0.4),
+                                      linewidth=0.4))
+    ax.add_patch(Rectangle(world.lower, *world.extent, fill=False, edgecolor="black",
+                           linewidth=1.0))
+    pad = 0.02 * float(np.max(world.extent))
+    ax.set_xlim(world.lower[0] - pad, world.upper[0] + pad)
+    ax.set_ylim(world.lower[1] - pad, world.upper[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+def draw_diffdrive(ax: Axes, world: World2D, result: KinoResult, model: DiffDrive,
+                   goal: ArrayLike | None = None, goal_radius: float | None = None) -> None:
+    """The world, the tree as integrated arcs, the centre path and wheel tracks, the
+    start (with its heading) and the goal region, with a legend."""
+    draw_world2d(ax, world)
+    count = len(result.tree_states) - 1
+    if count:
+        shown = 1 + np.linspace(0, count - 1, min(count, MAX_TREE_EDGES)).astype(int)
+        parents = result.tree_states[result.tree_parents[shown]]
+        arcs = arc_samples(parents, result.tree_controls[shown], result.tree_durations[shown],
+                           TREE_EDGE_CHORDS)
+        ax.add_collection(LineCollection(arcs[..., :2], colors=[TREE_COLOR], linewidths=0.4,
+                                         label=f"tree ({count:,} edges)"))
+    if result.solved:
+        centre, left, right, _ = wheel_tracks(result, model, 1e-3 * float(np.max(world.extent)))
+        ax.plot(*left.T, color=LEFT_COLOR, linewidth=0.7, label="left wheel")
+        ax.plot(*right.T, color=RIGHT_COLOR, linewidth=0.7, label="right wheel")
+        ax.plot(*centre.T, color=PATH_COLOR, linewidth=1.6,
+                label=f"centre ({result.duration:.1f} s)")
+    start = result.tree_states[0]
+    ax.add_patch(Circle(start[:2], max(model.radius, 1e-3), color=START_COLOR, alpha=0.5,
+                        label="start"))
+    arrow = 0.04 * float(np.max(world.extent))
+    ax.arrow(start[0], start[1], arrow * np.cos(start[2]), arrow * np.sin(start[2]),
+             color=START_COLOR, width=0.1 * arrow, length_includes_head=True)
+    if goal is not None and goal_radius is not None:
+        ax.add_patch(Circle(np.asarray(goal, dtype=float), goal_radius, color=GOAL_COLOR,
+                            alpha=0.35, label="goal region"))
+    ax.legend(loc="upper left", fontsize=7)
+
+
+def _outcome(result: KinoResult) -> str:
+    reached = f"goal in {result.duration:.1f} s of driving" if result.solved else "no plan"
+    return f"{result.planner}, seed {result.seed}: {reached}, {result.iterations:,} iterations"
+
+
+def diffdrive_figure(world: World2D, result: KinoResult, model: DiffDrive,
+                     goal: ArrayLike | None = None, goal_radius: float | None = None
+                     ) -> Figure:
+    """The plan on its world: tree arcs, centre path, wheel tracks, start and goal region
+    (drawn when ``goal`` (2,) and ``goal_radius`` (m) are given)."""
+    fig, ax = plt.subplots(figsize=(8, 8), dpi=120)
+    draw_diffdrive(ax, world, result, model, goal, goal_radius)
+    ax.set_title(f"{world.name}\n{_outcome(result)}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def diffdrive_controls_figure(result: KinoResult, model: DiffDrive) -> Figure:
+    """Speed and wheel speeds (m/s) above, turn rate (rad/s) below, against time (s)."""
+    t, v, omega, left, right = control_profile(result, model)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), dpi=120, sharex=True)
+    top.plot(t, v, color=PATH_COLOR, label="v (centre)")
+    top.plot(t, left, color=LEFT_COLOR, linewidth=0.9, label="left wheel")
+    top.plot(t, right, color=RIGHT_COLOR, linewidth=0.9, label="right wheel")
+    for limit in (model.v_min, model.v_max):
+        top.axhline(limit, color="grey", linestyle=":", linewidth=0.8)
+    top.set_ylabel("speed (m/s)")
+    top.legend(loc="upper right", fontsize=8)
+    bottom.plot(t, omega, color="tab:blue", label="omega")
+    for limit in (-model.omega_max, model.omega_max):
+        bottom.axhline(limit, color="grey", linestyle=":", linewidth=0.8)
+    bottom.set_ylabel("turn rate omega (rad/s)")
+    bottom.set_xlabel("time (s)")
+    top.set_title(f"controls: {_outcome(result)}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def biased_vs_unbiased_figure(world: World2D, biased_result: KinoResult,
+                              unbiased_result: KinoResult, model: DiffDrive,
+                              goal: ArrayLike | None = None, goal_radius: float | None = None
+                              ) -> Figure:
+    """Goal-biased and uniform sampling side by side, iteration counts in the titles."""
+    fig, axes = plt.subplots(1, 2, figsize=(14, 7), dpi=120)
+    for ax, result, label in ((axes[0], biased_result, "goal-biased"),
+                              (axes[1], unbiased_result, "unbiased")):
+        draw_diffdrive(ax, world, result, model, goal, goal_radius)
+        ax.set_title(f"{label} sampling: {result.iterations:,} iterations, "
+                     f"{len(result.tree_states):,} states\n{_outcome(result)}", fontsize=9)
+    fig.suptitle(world.name, fontsize=10)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,123 @@
+"""Figures of a quadrotor kinodynamic plan: the tree and path in 3D, the control profiles.
+
+Tree edges and the path are drawn as the parabolas the vehicle flies (each edge cut into
+a few chords), not as straight lines between states.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from mpl_toolkits.mplot3d.art3d import Line3DCollection
+from numpy.typing import ArrayLike
+
+from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor, exact_positions
+from quadnav.kinodynamic.result import KinoResult
+from quadnav.viz.map3d import draw_world
+from quadnav.world.model import World
+
+#: Chord segments drawn for the tree at most; a larger tree is thinned evenly.
+MAX_TREE_SEGMENTS = 20_000
+#: Chords per tree edge, and per path edge.
+TREE_PIECES = 4
+PATH_PIECES = 16
+TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
+PATH_COLOR = "red"
+
+
+def _motions(model: SampledQuadrotor, states: FloatArray, controls: FloatArray,
+             durations: FloatArray, pieces: int) -> FloatArray:
+    """Positions (E, pieces + 1, 3) along E exact motions from states (E, 6)."""
+    times = durations[:, None] * np.linspace(0.0, 1.0, pieces + 1)
+    return exact_positions(states, model.acceleration(controls), times)
+
+
+def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
+                     goal: ArrayLike | None = None) -> Figure:
+    """The world with the tree's parabolas in a light colour, the planned flight in red,
+    start and goal spheres; the title gives the outcome and search statistics.
+
+    Args:
+        world: the map, blocks not inflated.
+        result: a plan of :func:`~quadnav.kinodynamic.quadrotor.plan_quadrotor`.
+        model: the vehicle it was planned for (to redraw the parabolas).
+        goal: (3,) goal position, m; default the end of the path (none if unsolved).
+    """
+    fig = plt.figure(figsize=(9, 7), dpi=120)
+    ax = fig.add_subplot(projection="3d")
+    if goal is None and result.solved:
+        goal = result.states[-1, :3]
+    handles = draw_world(ax, world, result.tree_states[0, :3], goal)
+    children = np.flatnonzero(result.tree_parents >= 0)
+    if children.size:
+        shown = children[np.linspace(0, children.size - 1,
+                                     min(children.size, MAX_TREE_SEGMENTS // TREE_PIECES)
+                                     ).astype(int)]
+        points = _motions(model, result.tree_states[result.tree_parents[shown]],
+                          result.tree_controls[shown], result.tree_durations[shown],
+                          TREE_PIECES)
+        chords = np.stack([points[:, :-1], points[:, 1:]], axis=2).reshape(-1, 2, 3)
+        ax.add_collection3d(Line3DCollection(chords, colors=[TREE_COLOR], linewidths=0.4,
+                                             zorder=5))
+        label = f"tree ({children.size:,} edges" + (
+            f", {shown.size:,} drawn)" if shown.size < children.size else ")")
+        handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))
+    if result.solved:
+        path = _motions(model, result.states[:-1], result.controls, result.durations,
+                        PATH_PIECES)
+        ax.plot(*np.concatenate([path[:, :-1].reshape(-1, 3), result.states[-1:, :3]]).T,
+                color=PATH_COLOR, linewidth=2.2, zorder=20)
+        handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.2,
+                              label=f"flight ({result.duration:.2f} s)"))
+    ax.view_init(elev=30, azim=-60)
+    ax.legend(handles=handles, loc="upper left", fontsize=8)
+    outcome = (f"{len(result.controls)} controls, {result.duration:.2f} s" if result.solved
+               else "goal not reached")
+    ax.set_title(f"{world.name}\n{result.planner}, seed {result.seed}: {outcome}, "
+                 f"{len(result.tree_states):,} states, {result.iterations:,} iterations in "
+                 f"{result.seconds:.2f} s", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def quadrotor_controls_figure(result: KinoResult, model: SampledQuadrotor | None = None
+                              ) -> Figure:
+    """Roll and pitch (degrees) and thrust (N) against time as step plots, and the speed
+    (m/s); with ``model``, its limits as dashed lines and the hover thrust dotted."""
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=120, sharex=True)
+    if not result.solved:
+        axes[0].set_title(f"{result.planner}: goal not reached, no controls", fontsize=9)
+        fig.tight_layout()
+        return fig
+    knots = np.concatenate([[0.0], np.cumsum(result.durations)])
+    # A held control is drawn to the end of its interval: repeat the last one at the end.
+    held = np.vstack([result.controls, result.controls[-1:]])
+    rows = [(np.degrees(held[:, 0]), "roll phi (deg)"),
+            (np.degrees(held[:, 1]), "pitch theta (deg)"),
+            (held[:, 2], "thrust T (N)")]
+    for ax, (values, label) in zip(axes, rows, strict=False):
+        ax.step(knots, values, where="post", color="tab:blue", linewidth=1.2)
+        ax.set_ylabel(label)
+    # Velocity is linear in time on each edge: sample it between the planned states.
+    fractions = np.linspace(0.0, 1.0, 17)[:, None]
+    v0, v1 = result.states[:-1, None, 3:], result.states[1:, None, 3:]
+    speeds = np.linalg.norm(v0 + fractions * (v1 - v0), axis=2)  # (K - 1, 17)
+    times = knots[:-1, None] + result.durations[:, None] * fractions[:, 0]
+    axes[3].plot(times.ravel(), speeds.ravel(), color="tab:blue", linewidth=1.2)
+    axes[3].set_ylabel("speed (m/s)")
+    axes[3].set_xlabel("time (s)")
+    if model is not None:
+        roll, pitch = np.degrees(model.max_roll), np.degrees(model.max_pitch)
+        bounds = [(-roll, roll), (-pitch, pitch), (model.min_thrust, model.max_thrust),
+                  (model.speed_limit,)]
+        for ax, values in zip(axes, bounds, strict=True):
+            for value in values:
+                if value is not None:
+                    ax.axhline(value, color="gray", linestyle="--", linewidth=0.8)
+        axes[2].axhline(model.hover_thrust, color="gray", linestyle=":", linewidth=0.8)
+    axes[0].set_title(f"{result.planner}, seed {result.seed}: {len(result.controls)} controls "
+                      f"over {result.duration:.2f} s", fontsize=9)
+    fig.tight_layout()
+    return fig
