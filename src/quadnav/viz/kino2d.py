@@ -132,5 +132,5 @@ def biased_vs_unbiased_figure(world: World2D, biased_result: KinoResult,
         ax.set_title(f"{label} sampling: {result.iterations:,} iterations, "
                      f"{len(result.tree_states):,} states\n{_outcome(result)}", fontsize=9)
     fig.suptitle(world.name, fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.95))  # room for the suptitle above the titles
     return fig
