@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from quadnav.errors import MapError, QuadnavError
 from quadnav.world import World, load_world
-from quadnav.world.reading import decode_text, parse_float
+from quadnav.world.reading import decode_text, keyword_lines, parse_float
 
 FloatArray = NDArray[np.float64]
 
@@ -184,15 +184,8 @@ def parse_map2d(text: str, source: str) -> World2D:
     boundary_line = 0
     rects: list[list[float]] = []
     saw_content = False
-    for number, raw in enumerate(text.splitlines(), start=1):
-        fields = raw.split("#", 1)[0].split()
-        if not fields:
-            continue
+    for number, keyword, values in keyword_lines(text, source, ("boundary", "rect")):
         saw_content = True
-        keyword, values = fields[0], fields[1:]
-        if keyword not in ("boundary", "rect"):
-            raise MapError(source, f"unknown keyword {keyword!r}: expected 'boundary' or 'rect'",
-                           number)
         if len(values) != 4:
             raise MapError(source, f"{keyword}: expected 4 numbers (xmin ymin xmax ymax), "
                            f"got {len(values)} fields", number)

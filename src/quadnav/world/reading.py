@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -29,6 +29,20 @@ def decode_text(data: bytes, source: str) -> str:
     if "\x00" in text:
         raise MapError(source, "not a text file (contains NUL bytes)")
     return text
+
+
+def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
+                  ) -> Iterator[tuple[int, str, list[str]]]:
+    """``(line number, keyword, value fields)`` for each line of a keyword map text that
+    holds anything once ``#`` comments are removed; MapError for an unknown keyword."""
+    for number, raw in enumerate(text.splitlines(), start=1):
+        fields = raw.split("#", 1)[0].split()
+        if not fields:
+            continue
+        if fields[0] not in keywords:
+            raise MapError(source, f"unknown keyword {fields[0]!r}: expected "
+                           + " or ".join(repr(k) for k in keywords), number)
+        yield number, fields[0], fields[1:]
 
 
 def parse_float(token: str, source: str, line: int, what: str) -> float:

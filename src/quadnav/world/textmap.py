@@ -16,7 +16,13 @@ from __future__ import annotations
 
 from quadnav.errors import MapError
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
-from quadnav.world.reading import assemble_world, check_box, check_color, parse_float
+from quadnav.world.reading import (
+    assemble_world,
+    check_box,
+    check_color,
+    keyword_lines,
+    parse_float,
+)
 
 _FIELD_COUNTS = (6, 9)
 
@@ -29,15 +35,8 @@ def parse_text_map(text: str, source: str) -> World:
     colors: list[list[float]] = []
     lines: list[int] = []
     saw_content = False
-    for number, raw in enumerate(text.splitlines(), start=1):
-        fields = raw.split("#", 1)[0].split()
-        if not fields:
-            continue
+    for number, keyword, values in keyword_lines(text, source, ("boundary", "block")):
         saw_content = True
-        keyword, values = fields[0], fields[1:]
-        if keyword not in ("boundary", "block"):
-            raise MapError(source, f"unknown keyword {keyword!r}: expected 'boundary' or 'block'",
-                           number)
         if len(values) not in _FIELD_COUNTS:
             raise MapError(
                 source,
