@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import QuadnavError
+from quadnav.planning import planner_names
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -114,3 +115,16 @@ def resolve_start_goal(args: argparse.Namespace, world: World
         goal = np.array(args.goal)
     return start, goal
 
+
+
+def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iterations: int) -> None:
+    """--planner NAME, --time S, --seed N and --iterations N with the given defaults."""
+    parser.add_argument("--planner", default="rrtstar", metavar="NAME",
+                        help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    parser.add_argument("--time", type=positive_float, default=time, metavar="S",
+                        help=f"search time budget in seconds (default: {time:g})")
+    parser.add_argument("--seed", type=natural, default=0, metavar="N",
+                        help="random seed; the same seed gives the same result (default: 0)")
+    budget = f"{iterations:,} samples" if iterations else "the time budget only"
+    parser.add_argument("--iterations", type=natural, default=iterations, metavar="N",
+                        help=f"stop after N samples as well; 0: no limit (default: {budget})")

@@ -5,7 +5,8 @@ world sliced at ``--height``, by default half way up its z range); ``quadnav kin
 quadrotor`` plans in a 3D map. Both write into the output folder:
 
 * ``kino.json`` — the query, the outcome and the search statistics, the settings and the
-  vehicle's parameters;
+  vehicle's parameters; for the quadrotor also how far the controls flown open loop end
+  from the planned positions (``replay``: point mass; ``replay_6dof``: full dynamics);
 * ``states.csv`` — the planned states, one row per tree state on the plan: ``t`` (s from
   the start) then the state's coordinates;
 * ``controls.csv`` — one row per control of the plan: ``t_start``, ``duration`` (s) and
@@ -49,6 +50,13 @@ from quadnav.files import atomic_output
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_TOLERANCE, plan_quadrotor, replay
+from quadnav.kinodynamic.replay6dof import (
+    DRIFT_RATE,
+    replay_6dof,
+    replay_6dof_tolerance,
+    replay_vehicle,
+    response_delays,
+)
 from quadnav.kinodynamic.result import FloatArray, KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import MAP2D_SUFFIX, World2D, load_world2d
@@ -257,6 +265,15 @@ def diffdrive(args: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------ quadrotor
+def replay_errors(result: KinoResult, times: FloatArray, positions: FloatArray) -> FloatArray:
+    """Distances (K,), m, between the planned positions and a replay's positions (N, 3) at
+    its times (N,) s nearest the planned states' times."""
+    planned = state_times(result)
+    rows = np.clip(np.searchsorted(times, planned), 1, len(times) - 1)
+    rows -= (planned - times[rows - 1]) < (times[rows] - planned)
+    return np.linalg.norm(positions[rows] - result.states[:, :3], axis=1)
+
+
 def replay_error(model: SampledQuadrotor, result: KinoResult) -> float | None:
     """Largest distance, m, between the planned positions and those of the plan's controls
     flown open loop from its first state (:func:`~quadnav.kinodynamic.quadrotor.replay`),
@@ -264,10 +281,29 @@ def replay_error(model: SampledQuadrotor, result: KinoResult) -> float | None:
     if not result.solved:
         return None
     times, states = replay(model, result.states[0], result.controls, result.durations)
-    planned = state_times(result)
-    rows = np.clip(np.searchsorted(times, planned), 1, len(times) - 1)
-    rows -= (planned - times[rows - 1]) < (times[rows] - planned)
-    return float(np.max(np.linalg.norm(states[rows, :3] - result.states[:, :3], axis=1)))
+    return float(np.max(replay_errors(result, times, states[:, :3])))
+
+
+def replay_6dof_summary(model: SampledQuadrotor, result: KinoResult
+                        ) -> tuple[dict[str, Any], FloatArray | None]:
+    """The plan's controls flown open loop through the 6-DOF dynamics of
+    :func:`~quadnav.kinodynamic.replay6dof.replay_vehicle`: ``kino.json``'s entry (largest
+    distance from the planned positions, m; the tolerance at the end of the flight, m;
+    whether every planned state is within the tolerance at its time; the vehicle and the
+    leads, s) and the flown positions (N, 3), ``None`` without a plan."""
+    vehicle = replay_vehicle()
+    leads = response_delays(vehicle)
+    entry: dict[str, Any] = {"vehicle": vehicle.name, "attitude_lead": leads[0],
+                             "thrust_lead": leads[1], "drift_rate": DRIFT_RATE}
+    if not result.solved:
+        return {"max_position_error": None, "tolerance": None, "within_tolerance": None,
+                **entry}, None
+    times, states = replay_6dof(model, vehicle, result.states[0], result.controls,
+                                result.durations, leads=leads)
+    errors = replay_errors(result, times, states[:, :3])
+    bounds = replay_6dof_tolerance(state_times(result))
+    return {"max_position_error": float(errors.max()), "tolerance": float(bounds[-1]),
+            "within_tolerance": bool(np.all(errors <= bounds)), **entry}, states[:, :3]
 
 
 def quadrotor(args: argparse.Namespace) -> int:
@@ -294,9 +330,10 @@ def quadrotor(args: argparse.Namespace) -> int:
     data = summary("quadrotor", world.name, result, settings, model, query)
     data["replay"] = {"max_position_error": replay_error(model, result),
                       "tolerance": REPLAY_TOLERANCE}
+    data["replay_6dof"], flown = replay_6dof_summary(model, result)
     tables = plan_tables(result, ("x", "y", "z", "vx", "vy", "vz"),
                          dict(zip(("phi", "theta", "thrust"), result.controls.T, strict=True)))
-    figures = {"kino.png": lambda: quadrotor_figure(world, result, model, goal),
+    figures = {"kino.png": lambda: quadrotor_figure(world, result, model, goal, flown),
                "controls.png": lambda: quadrotor_controls_figure(result, model)}
     written = write_outputs(folder, result, data, tables, figures)
     return finish(folder, world.name, [(sampling(settings), result)], written)
@@ -368,7 +405,10 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                     "most 2 m/s; controls held 0.5 s), from rest. DIR/states.csv holds "
                     "positions and velocities, DIR/controls.csv phi, theta (rad) and thrust "
                     "(N); kino.json also gives how closely the controls flown open loop "
-                    "reproduce the planned positions.")
+                    "reproduce the planned positions: through the point-mass model (to "
+                    "round-off) and through the full 6-DOF dynamics of a Tello without drag "
+                    f"(within {DRIFT_RATE:g} m * (t / 1 s)^1.5 at time t; drawn in "
+                    "DIR/kino.png).")
     p.add_argument("map", metavar="MAP",
                    help="map file (.txt or .json) or built-in world spec, e.g. forest:seed=3")
     p.add_argument("--start", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),

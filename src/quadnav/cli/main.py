@@ -1,7 +1,8 @@
 """Entry point of the ``quadnav`` command.
 
-Exit codes: 0 success; 2 bad input (a malformed map, a bad flag, a point in a block),
-reported as one line on stderr with no traceback.
+Exit codes: 0 success; 1 a flight or search that failed (see each command); 2 bad
+input (a malformed map, a bad flag, a point in a block), reported as one line on
+stderr with no traceback.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import warnings
 from collections.abc import Sequence
 
 from quadnav import __version__
+from quadnav.cli.fly_command import add_fly_command
 from quadnav.cli.kino_command import add_kino_command
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
@@ -37,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"quadnav {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    add_fly_command(commands)
     add_map_commands(commands)
     add_plan_command(commands)
     add_traj_command(commands)

@@ -6,21 +6,20 @@ import argparse
 import json
 import sys
 
-from tqdm import tqdm
-
 from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
+    add_planner_arguments,
     add_start_goal_arguments,
-    natural,
     output_folder,
     positive_float,
     probability,
     resolve_margin,
     resolve_start_goal,
 )
+from quadnav.cli.progress import planning_bar
 from quadnav.files import atomic_output
-from quadnav.planning import PlannerSettings, get_planner, make_problem, planner_names
+from quadnav.planning import PlannerSettings, get_planner, make_problem
 from quadnav.planning.refine import refine
 from quadnav.planning.report import path_csv, plan_summary
 from quadnav.planning.settings import DEFAULT_TIME_LIMIT
@@ -48,13 +47,7 @@ def plan(args: argparse.Namespace) -> int:
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)
     problem = make_problem(world, start, goal, resolve_margin(args, world))
-    with tqdm(total=100, desc=args.planner, unit="%", leave=False, disable=args.quiet,
-              file=sys.stderr, bar_format="{desc}: {bar} {n:.0f}%{postfix}") as bar:
-        def progress(fraction: float, best: float) -> None:
-            bar.set_postfix_str(f"best {best:.2f} m" if best < float("inf") else "no path yet",
-                                refresh=False)
-            bar.update(100 * fraction - bar.n)
-
+    with planning_bar(args.planner, args.quiet) as progress:
         result = planner(problem, settings, progress)
     raw_length = result.length
     if not args.no_refine:
@@ -104,14 +97,7 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
-    p.add_argument("--planner", default="rrtstar", metavar="NAME",
-                   help=f"one of {', '.join(planner_names())} (default: rrtstar)")
-    p.add_argument("--time", type=positive_float, default=DEFAULT_TIME_LIMIT, metavar="S",
-                   help=f"search time budget in seconds (default: {DEFAULT_TIME_LIMIT:g})")
-    p.add_argument("--seed", type=natural, default=0, metavar="N",
-                   help="random seed; the same seed gives the same path (default: 0)")
-    p.add_argument("--iterations", type=natural, default=0, metavar="N",
-                   help="stop after N samples as well (default: time budget only)")
+    add_planner_arguments(p, time=DEFAULT_TIME_LIMIT, iterations=0)
     p.add_argument("--first", action="store_true",
                    help="stop at the first solution instead of improving it")
     p.add_argument("--step", type=positive_float, metavar="M",

@@ -295,9 +295,10 @@ def replay(model: SampledQuadrotor, start_state: ArrayLike, controls: ArrayLike,
     states to round-off: within :data:`REPLAY_TOLERANCE` = 1e-9 (measured: 7e-12 on a
     30 s flight, 7e-11 on a 170 s one; round-off grows with the number of steps).
 
-    This is the place to switch to the full 6-DOF vehicle dynamics (attitude and rotor
-    response) when quadnav has them; the planned states will then be reproduced only to
-    the tolerance those dynamics allow.
+    This checks the planner's own propagation; flying the same controls through the full
+    6-DOF vehicle (attitude and rotor response) is
+    :func:`quadnav.kinodynamic.replay6dof.replay_6dof`, which reproduces the planned
+    positions only to the tolerance those dynamics allow.
 
     Args:
         model: the vehicle.

@@ -83,7 +83,8 @@ def make_problem(world: World, start: ArrayLike | None, goal: ArrayLike | None,
             raise QuadnavError(f"{world.name}: the map has no {label}; give --{label} X Y Z")
         report = classify_point(world, point, margin, label)
         if not report.usable:
-            raise QuadnavError(f"{report}; a path must {label} in free space")
+            verb = "start" if label == "start" else "end"
+            raise QuadnavError(f"{report}; a path must {verb} in free space")
         ends.append((report.point, _leave_margin(world, free_world, report.point, label)))
     (start_point, search_start), (goal_point, search_goal) = ends
     if disconnected(free_world, search_start, search_goal):

@@ -118,9 +118,9 @@ def _load_kernels() -> None:
     them once on a one-block world, so that loading is not charged to a search."""
     world = World(boundary=np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0]),
                   blocks=np.array([[0.4, 0.4, 0.4, 0.6, 0.6, 0.6]]))
-    problem = PlanningProblem(world, 0.0, world, *[np.array([0.1, 0.1, 0.1])] * 2,
-                              *[np.array([0.9, 0.9, 0.9])] * 2)
-    _search(problem, PlannerSettings(max_iterations=200, seed=0), None)
+    start, goal = np.array([0.1, 0.1, 0.1]), np.array([0.9, 0.9, 0.9])
+    problem = PlanningProblem(world, 0.0, world, start, goal, start, goal)
+    _search(problem, PlannerSettings(max_iterations=200, seed=0, time_limit=3600.0), None)
     TreeState.empty(1).grown(1, 2, world.lower, world.extent)
 
 

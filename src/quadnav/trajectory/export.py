@@ -29,7 +29,8 @@ def _samples(trajectory: Trajectory, dt: float) -> Samples:
     return trajectory.sample(dt)
 
 
-def _table(rows: FloatArray, header: str = "") -> str:
+def csv_table(rows: FloatArray, header: str = "") -> str:
+    """Rows (N, K) as CSV text in :data:`NUMBER_FORMAT`, after a header line if given."""
     buffer = io.StringIO()
     np.savetxt(buffer, rows, fmt=NUMBER_FORMAT, delimiter=",", header=header, comments="")
     return buffer.getvalue()
@@ -39,7 +40,7 @@ def trajectory_csv(trajectory: Trajectory, dt: float) -> str:
     """The trajectory sampled every ``dt`` s as CSV text: the header :data:`CSV_HEADER`,
     then one row per sample ``t, x, y, z, vx, vy, vz, ax, ay, az, yaw`` (SI units, rad)."""
     s = _samples(trajectory, dt)
-    return _table(np.column_stack([s.t, s.position, s.velocity, s.acceleration, s.yaw]),
+    return csv_table(np.column_stack([s.t, s.position, s.velocity, s.acceleration, s.yaw]),
                   CSV_HEADER)
 
 
@@ -48,4 +49,4 @@ def mp_csv(trajectory: Trajectory, dt: float) -> str:
     9 rows ``px, py, pz, vx, vy, vz, ax, ay, az`` (m, m/s, m/s^2) and one column per
     sample (times are implied: ``k * dt``, the last column the end time)."""
     s = _samples(trajectory, dt)
-    return _table(np.vstack([s.position.T, s.velocity.T, s.acceleration.T]))
+    return csv_table(np.vstack([s.position.T, s.velocity.T, s.acceleration.T]))

@@ -172,3 +172,10 @@ class Trajectory:
         if t[-1] < self.duration:
             t = np.append(t, self.duration)
         return Samples(t, self.position(t), self.velocity(t), self.acceleration(t), self.yaw(t))
+
+
+def hold_trajectory(position: ArrayLike, duration: float, yaw: float = 0.0) -> Trajectory:
+    """Hover at ``position`` (3,) m heading ``yaw`` rad for ``duration`` s (method ``hold``)."""
+    point = np.asarray(position, dtype=np.float64).reshape(3)
+    return Trajectory(ppoly_from_ascending(point.reshape(1, 1, 3), [0.0, duration]),
+                      np.stack([point, point]), "hold", yaw0=yaw)

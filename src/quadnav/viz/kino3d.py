@@ -25,6 +25,7 @@ TREE_PIECES = 4
 PATH_PIECES = 16
 TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
 PATH_COLOR = "red"
+FLOWN_COLOR = "darkorange"
 
 
 def _motions(model: SampledQuadrotor, states: FloatArray, controls: FloatArray,
@@ -35,7 +36,8 @@ def _motions(model: SampledQuadrotor, states: FloatArray, controls: FloatArray,
 
 
 def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
-                     goal: ArrayLike | None = None) -> Figure:
+                     goal: ArrayLike | None = None, flown: ArrayLike | None = None
+                     ) -> Figure:
     """The world with the tree's parabolas in a light colour, the planned flight in red,
     start and goal spheres; the title gives the outcome and search statistics.
 
@@ -44,6 +46,9 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         result: a plan of :func:`~quadnav.kinodynamic.quadrotor.plan_quadrotor`.
         model: the vehicle it was planned for (to redraw the parabolas).
         goal: (3,) goal position, m; default the end of the path (none if unsolved).
+        flown: (N, 3) positions, m, of the plan's controls flown open loop through the
+            6-DOF dynamics (:func:`~quadnav.kinodynamic.replay6dof.replay_6dof`), drawn
+            dashed (when the plan is solved) with its distance from the planned end.
     """
     fig = plt.figure(figsize=(9, 7), dpi=120)
     ax = fig.add_subplot(projection="3d")
@@ -64,6 +69,12 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         label = f"tree ({children.size:,} edges" + (
             f", {shown.size:,} drawn)" if shown.size < children.size else ")")
         handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))
+    if flown is not None and result.solved:
+        flown = np.asarray(flown, dtype=np.float64)
+        ax.plot(*flown.T, color=FLOWN_COLOR, linewidth=1.4, linestyle="--", zorder=15)
+        miss = np.linalg.norm(flown[-1] - result.states[-1, :3])
+        handles.append(Line2D([], [], color=FLOWN_COLOR, linewidth=1.4, linestyle="--",
+                              label=f"controls flown open loop, 6-DOF (ends {miss:.2f} m off)"))
     if result.solved:
         path = _motions(model, result.states[:-1], result.controls, result.durations,
                         PATH_PIECES)

@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.planning.problem import PlanningProblem
@@ -18,20 +19,28 @@ TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
 PATH_COLOR = "red"
 
 
+def draw_tree(ax: Axes3D, edges: np.ndarray) -> Line2D | None:
+    """Draw a search tree's edges (E, 2, 3), m, in a light colour on a 3D axes, thinned
+    to at most :data:`MAX_TREE_EDGES` evenly spread ones; returns a legend handle giving
+    the counts (None, and nothing drawn, for no edges)."""
+    if not len(edges):
+        return None
+    shown = edges[np.linspace(0, len(edges) - 1, min(len(edges), MAX_TREE_EDGES)).astype(int)]
+    ax.add_collection3d(Line3DCollection(shown, colors=[TREE_COLOR], linewidths=0.4, zorder=5))
+    label = f"tree ({len(edges):,} edges" + (
+        f", {len(shown):,} drawn)" if len(shown) < len(edges) else ")")
+    return Line2D([], [], color=TREE_COLOR[:3], label=label)
+
+
 def plan_figure(problem: PlanningProblem, result: PlanResult) -> Figure:
     """The world with the explored tree in a light colour, the path in red, start and
     goal spheres; the title gives the planner, length and search statistics."""
     fig = plt.figure(figsize=(9, 7), dpi=120)
     ax = fig.add_subplot(projection="3d")
     handles = draw_world(ax, problem.world, problem.start, problem.goal)
-    edges = result.tree_edges()
-    if len(edges):
-        shown = edges[np.linspace(0, len(edges) - 1, min(len(edges), MAX_TREE_EDGES)).astype(int)]
-        ax.add_collection3d(Line3DCollection(shown, colors=[TREE_COLOR], linewidths=0.4,
-                                             zorder=5))
-        label = f"tree ({len(edges):,} edges" + (
-            f", {len(shown):,} drawn)" if len(shown) < len(edges) else ")")
-        handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))
+    tree = draw_tree(ax, result.tree_edges())
+    if tree is not None:
+        handles.append(tree)
     if result.solved:
         ax.plot(*result.path.T, color=PATH_COLOR, linewidth=2.2, zorder=20)
         handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.2,

@@ -1,0 +1,196 @@
+"""``quadnav fly``: plan, smooth, fly in simulation and report — the main job."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from quadnav.cli.args import (
+    add_map_argument,
+    add_margin_argument,
+    add_planner_arguments,
+    add_start_goal_arguments,
+    output_folder,
+    positive_float,
+    resolve_margin,
+    resolve_start_goal,
+)
+from quadnav.cli.progress import fraction_bar, planning_bar
+from quadnav.control.gains import load_gains
+from quadnav.files import atomic_output
+from quadnav.mission import (
+    DEFAULT_ACCELERATION,
+    DEFAULT_ITERATIONS,
+    DEFAULT_SPEED,
+    DEFAULT_TIME_CAP,
+    Mission,
+    MissionSettings,
+    fly_problem,
+)
+from quadnav.planning import PlannerSettings, get_planner, make_problem
+from quadnav.planning.report import path_csv
+from quadnav.sim.export import flight_csv
+from quadnav.sim.settings import SimSettings
+from quadnav.trajectory.export import trajectory_csv
+from quadnav.trajectory.generate import TrajectorySettings
+from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
+from quadnav.world import load_world
+
+#: Exit code of a flight that collided, missed the goal or found no path.
+EXIT_FAILED = 1
+#: Sample interval of trajectory.csv, s.
+TRAJECTORY_DT = 0.01
+FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
+
+
+def mission_settings(args: argparse.Namespace) -> MissionSettings:
+    """Mission settings from the command-line flags (files are read here)."""
+    vehicle = load_params(args.params)
+    return MissionSettings(
+        planner=args.planner,
+        planning=PlannerSettings(seed=args.seed, max_iterations=args.iterations or None,
+                                 time_limit=args.time),
+        trajectory=TrajectorySettings(v_max=args.speed, a_max=args.accel),
+        vehicle=vehicle,
+        gains=load_gains(args.gains, vehicle.gains),
+        sim=SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
+                        settle_time=args.settle, seed=args.seed),
+    )
+
+
+def fly(args: argparse.Namespace) -> int:
+    """Run the mission, write the outputs; exit 1 unless it reached the goal cleanly."""
+    get_planner(args.planner)
+    folder = output_folder(args.output)
+    settings = mission_settings(args)
+    world = load_world(args.map)
+    start, goal = resolve_start_goal(args, world)
+    problem = make_problem(world, start, goal, resolve_margin(args, world))
+    with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
+            fraction_bar("fly", args.quiet) as flying:
+        mission = fly_problem(problem, settings, planning, flying)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = _write_outputs(mission, folder, figures=not args.no_figures)
+    _print_summary(mission)
+    print("wrote " + ", ".join(str(folder / name) for name in written))
+    if not mission.success:
+        print(f"quadnav: flight failed: {_failure(mission)}", file=sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+def _write_outputs(mission: Mission, folder, figures: bool) -> list[str]:
+    """Write every output file of the mission (the figures if ``figures``); stale files
+    of an earlier run go."""
+    texts = {"metrics.json": json.dumps(_json_ready(mission.metrics()), indent=2) + "\n"}
+    if mission.flight is not None:
+        texts["path.csv"] = path_csv(mission.plan.path)
+        texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
+        texts["flight.csv"] = flight_csv(mission.flight)
+    for name in ("path.csv", "trajectory.csv", "flight.csv", *FIGURES):
+        if name not in texts:
+            (folder / name).unlink(missing_ok=True)
+    for name, text in texts.items():
+        with atomic_output(folder / name) as tmp:
+            tmp.write_text(text)
+    if mission.flight is None or not figures:
+        return list(texts)
+    from quadnav.viz.figures import save_figure
+    from quadnav.viz.flight_figures import (
+        flight_3d_figure,
+        flight_states_figure,
+        tracking_error_figure,
+    )
+
+    for name, figure in zip(FIGURES, (flight_3d_figure(mission),
+                                      flight_states_figure(mission.flight),
+                                      tracking_error_figure(mission.flight)), strict=True):
+        save_figure(figure, folder / name)
+    return [*texts, *FIGURES]
+
+
+def _json_ready(value):
+    """JSON has no infinity or NaN: such numbers become null."""
+    if isinstance(value, dict):
+        return {key: _json_ready(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_json_ready(item) for item in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _failure(mission: Mission) -> str:
+    """One line saying why the mission failed."""
+    if mission.flight is None:
+        return f"no path: {mission.plan.message}"
+    flight = mission.flight
+    if flight.contact_block is not None:
+        return (f"collided with block {flight.contact_block} at t = "
+                f"{flight.contact_time:.2f} s")
+    if flight.contact_time is not None:
+        return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
+    return (f"ended {100 * flight.final_error:.1f} cm from the goal (tolerance "
+            f"{100 * mission.settings.sim.goal_tolerance:.0f} cm)")
+
+
+def _print_summary(mission: Mission) -> None:
+    m = mission.metrics()
+    print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
+          f"{m['seed']}, vehicle {m['vehicle']}, cruise {m['speed_m_s']:g} m/s")
+    if mission.flight is None:
+        print(f"  no path after {m['planning_time_s']:.2f} s of planning")
+        return
+    print(f"  path {m['path_length_m']:.2f} m, trajectory {m['trajectory_duration_s']:.2f} s, "
+          f"flight {m['ending']} after {m['flight_time_s']:.2f} s")
+    clearance = m["min_clearance_m"]
+    print(f"  tracking error RMS {100 * m['rms_tracking_error_m']:.2f} cm, max "
+          f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
+          f"{100 * m['final_error_m']:.2f} cm; min clearance "
+          + ("none (no blocks)" if clearance is None else f"{clearance:.3f} m"))
+    print(f"  wall time: planning {m['planning_time_s']:.2f} s, trajectory "
+          f"{m['trajectory_time_s']:.2f} s, simulation {m['sim_wall_time_s']:.2f} s "
+          f"({m['real_time_factor']:.0f}x real time)")
+
+
+def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav fly`` on the top-level subparsers."""
+    p = subparsers.add_parser(
+        "fly", help="plan, smooth and fly a simulated quadrotor through a map (the main job)",
+        description="The whole pipeline: plan a path with RRT* through MAP, shortcut and "
+                    "smooth it, make a minimum-snap trajectory at the cruise speed, and fly "
+                    "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
+                    "DIR/metrics.json, DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and "
+                    f"the figures {', '.join(FIGURES)}. Exit 0 when the vehicle reaches the "
+                    "goal without touching a block; 1 on a collision, a missed goal or no "
+                    "path (metrics.json is still written); 2 on bad input.")
+    add_map_argument(p, optional=True)
+    add_start_goal_arguments(p)
+    add_margin_argument(p)
+    p.add_argument("--speed", type=positive_float, default=DEFAULT_SPEED, metavar="V",
+                   help=f"cruise speed, m/s (default: {DEFAULT_SPEED:g})")
+    p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
+                   help=f"largest acceleration of the trajectory, m/s^2 "
+                        f"(default: {DEFAULT_ACCELERATION:g})")
+    p.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
+                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
+                        f"(default: {DEFAULT_PRESET})")
+    p.add_argument("--gains", metavar="FILE",
+                   help="controller gains TOML file; keys it leaves out keep the gains tuned "
+                        "for the vehicle")
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=DEFAULT_ITERATIONS)
+    p.add_argument("--physics-rate", type=positive_float, default=SimSettings.physics_rate,
+                   metavar="HZ", help="RK4 steps per second (default: 1000)")
+    p.add_argument("--control-rate", type=positive_float, default=SimSettings.control_rate,
+                   metavar="HZ", help="controller updates per second; the physics rate "
+                                      "must be a whole multiple (default: 1000)")
+    p.add_argument("--settle", type=float, default=SimSettings.settle_time, metavar="S",
+                   help="seconds flown after the trajectory ends (default: 2)")
+    p.add_argument("--no-figures", action="store_true",
+                   help="skip the figures (faster, e.g. for batches of runs)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("-o", "--output", default="flight", metavar="DIR",
+                   help="folder to write into, created if needed (default: flight)")
+    p.set_defaults(handler=fly)

@@ -1,0 +1,107 @@
+"""Dataclasses from TOML files: vehicle parameters and controller gains.
+
+A config dataclass has fields that are numbers, strings, read-only float64 arrays of a
+fixed length, or nested config dataclasses (one TOML table each). :func:`from_table`
+fills one from a TOML table on top of a base value, so a file may set just the keys it
+changes. Every mistake (an unknown key, a wrong type, a vector of the wrong length, a
+value out of range) is a :class:`~quadnav.errors.QuadnavError` naming the file and key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from quadnav.errors import QuadnavError
+
+C = TypeVar("C")
+
+
+def frozen_vector(values: ArrayLike, length: int) -> NDArray[np.float64]:
+    """A read-only float64 copy of ``values`` with shape ``(length,)``."""
+    array = np.array(values, dtype=np.float64).reshape(length)
+    array.flags.writeable = False
+    return array
+
+
+def vector_field(*values: float) -> Any:
+    """A dataclass field defaulting to a fresh read-only vector of ``values``."""
+    return dataclasses.field(default_factory=lambda: frozen_vector(values, len(values)))
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """The table of the TOML file at ``path``; QuadnavError naming the file and line."""
+    path = Path(path)
+    try:
+        with path.open("rb") as file:
+            return tomllib.load(file)
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
+    except tomllib.TOMLDecodeError as error:
+        raise QuadnavError(f"{path}: not valid TOML: {error}") from None
+
+
+def _value(current: Any, raw: Any, where: str) -> Any:
+    if isinstance(current, np.ndarray):
+        numbers = raw if isinstance(raw, list) else None
+        if (numbers is None or len(numbers) != len(current)
+                or not all(_is_number(v) for v in numbers)):
+            raise QuadnavError(f"{where}: expected a list of {len(current)} numbers, got {raw!r}")
+        return frozen_vector(numbers, len(current))
+    if isinstance(current, str):
+        if not isinstance(raw, str):
+            raise QuadnavError(f"{where}: expected a string, got {raw!r}")
+        return raw
+    if isinstance(current, bool):
+        if not isinstance(raw, bool):
+            raise QuadnavError(f"{where}: expected true or false, got {raw!r}")
+        return raw
+    if isinstance(current, int):
+        if not isinstance(raw, int) or isinstance(raw, bool):
+            raise QuadnavError(f"{where}: expected a whole number, got {raw!r}")
+        return raw
+    if not _is_number(raw):
+        raise QuadnavError(f"{where}: expected a number, got {raw!r}")
+    return float(raw)
+
+
+def _is_number(value: Any) -> bool:
+    return (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value))
+
+
+def from_table(base: C, table: dict[str, Any], where: str) -> C:
+    """``base`` (a config dataclass) with the keys of ``table`` replaced.
+
+    ``where`` prefixes messages, e.g. ``"gains.toml"``; nested tables add ``[name]``.
+    """
+    fields = {f.name: f for f in dataclasses.fields(base) if f.init}
+    changes: dict[str, Any] = {}
+    for key, raw in table.items():
+        if key not in fields:
+            raise QuadnavError(f"{where}: unknown key {key!r}; expected one of "
+                               f"{', '.join(fields)}")
+        current = getattr(base, key)
+        if dataclasses.is_dataclass(current):
+            if not isinstance(raw, dict):
+                raise QuadnavError(f"{where}: {key} must be a table [{key}]")
+            changes[key] = from_table(current, raw, f"{where} [{key}]")
+        else:
+            changes[key] = _value(current, raw, f"{where}: {key}")
+    try:
+        return dataclasses.replace(base, **changes)
+    except QuadnavError as error:
+        raise QuadnavError(f"{where}: {error}") from None
+
+
+def require(checks: list[tuple[bool, str]]) -> None:
+    """Raise QuadnavError with the message of the first failed ``(ok, message)`` check."""
+    for ok, message in checks:
+        if not ok:
+            raise QuadnavError(message)

@@ -1,0 +1,255 @@
+"""The PX4-style cascade, compiled with numba: position -> velocity -> thrust vector ->
+attitude -> body rate -> mixer -> motor commands.
+
+One call of :func:`control` runs every loop once (the same rate for all):
+
+1. **Position PID** (world axes): velocity setpoint = trajectory velocity (feed-forward)
+   + PID of the position error; saturated to the horizontal, climb and descent limits.
+2. **Velocity PID**: acceleration setpoint = trajectory acceleration (feed-forward) + P
+   and I of the velocity error + D on the filtered difference between the trajectory's
+   and the measured acceleration; horizontal acceleration saturated.
+3. **Thrust vector** ``m (a + g e3)`` plus the drag the vehicle meets at the trajectory
+   velocity; tilt limited, then magnitude limited keeping the vertical part first.
+   Anti-windup: the velocity integral sees the error less what saturation took away
+   (back-calculation, as PX4), and its contribution is bounded.
+4. **Attitude P**: the desired attitude points body z along the thrust vector and
+   heads the trajectory's yaw; rate setpoint = 2 kp times the vector part of the
+   quaternion error (plus the yaw-rate feed-forward), limited per axis.
+5. **Rate PID**: angular acceleration = PID of the rate error (D on the filtered
+   measured rate); torque = J alpha + w x J w. The integral pauses while the mixer
+   saturates.
+6. **Mixer** (:func:`quadnav.vehicle.rotors.mix`): collective thrust along the current
+   body z and the torques to per-rotor thrusts, then motor commands in [0, 1].
+
+The controller's memory (integrals, filters, previous values) is a float64 array of
+:data:`MEMORY_SIZE`; start from :func:`new_memory`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from quadnav.control.gains import Gains
+from quadnav.vehicle import quaternion
+from quadnav.vehicle.dynamics import VehicleArrays
+from quadnav.vehicle.rotors import mix
+
+#: Reference row layout (11,): position (3) m, velocity (3) m/s, acceleration (3) m/s^2,
+#: yaw rad, yaw rate rad/s.
+REFERENCE_SIZE = 11
+# Memory layout.
+_POSITION_INTEGRAL = 0
+_VELOCITY_INTEGRAL = 3
+_RATE_INTEGRAL = 6
+_POSITION_ERROR_RATE = 9
+_ACCELERATION = 12
+_ANGULAR_ACCELERATION = 15
+_PREVIOUS_POSITION_ERROR = 18
+_PREVIOUS_VELOCITY = 21
+_PREVIOUS_RATES = 24
+MIXER_SATURATED = 27
+_STARTED = 28
+MEMORY_SIZE = 29
+
+
+class GainArrays(NamedTuple):
+    """:class:`~quadnav.control.gains.Gains` as plain arrays for compiled code: rows of
+    (3,) per loop, limits in SI units (radians)."""
+
+    position: np.ndarray  # (4, 3): kp, ki, kd, integral limit
+    velocity: np.ndarray  # (4, 3)
+    attitude_kp: np.ndarray  # (3,)
+    rate: np.ndarray  # (4, 3)
+    speed_limits: np.ndarray  # (3,): horizontal, up, down, m/s
+    acceleration_xy: float
+    tilt_max: float
+    thrust_range: np.ndarray  # (2,): fractions of the total rotor thrust
+    rate_max: np.ndarray  # (3,) rad/s
+    derivative_cutoff: float  # Hz
+
+
+def gain_arrays(gains: Gains) -> GainArrays:
+    """The compiled-code form of ``gains``."""
+    def rows(pid):
+        return np.array([pid.kp, pid.ki, pid.kd, pid.integral_limit])
+    limits = gains.limits
+    return GainArrays(
+        rows(gains.position), rows(gains.velocity), np.array(gains.attitude_kp),
+        rows(gains.rate), np.array([limits.speed_xy, limits.speed_up, limits.speed_down]),
+        limits.acceleration_xy, math.radians(limits.tilt_max_deg),
+        np.array([limits.thrust_min, limits.thrust_max]), np.radians(limits.rate_max_deg),
+        limits.derivative_cutoff_hz)
+
+
+def new_memory() -> np.ndarray:
+    """Fresh controller memory: integrals and filters at zero."""
+    return np.zeros(MEMORY_SIZE)
+
+
+@njit(cache=True, inline="always")
+def _clip(value: float, bound: float) -> float:
+    return min(max(value, -bound), bound)
+
+
+@njit(cache=True, inline="always")
+def _scale_xy(v: np.ndarray, limit: float) -> None:
+    """Scale the horizontal part of ``v`` (3,) in place to a norm of at most ``limit``."""
+    norm = math.hypot(v[0], v[1])
+    if norm > limit:
+        v[0] *= limit / norm
+        v[1] *= limit / norm
+
+
+@njit(cache=True, inline="always")
+def _filtered_rate(memory, at, previous_at, value, a, dt, alpha, started) -> float:
+    """Low-pass filtered finite difference of ``value`` (axis ``a`` of a vector kept at
+    memory[previous_at:]), kept at memory[at + a]."""
+    if started:
+        raw = (value - memory[previous_at + a]) / dt
+        memory[at + a] += alpha * (raw - memory[at + a])
+    memory[previous_at + a] = value
+    return memory[at + a]
+
+
+@njit(cache=True)
+def _thrust_vector(force: np.ndarray, v: VehicleArrays, g: GainArrays) -> None:
+    """Limit the thrust vector ``force`` (3,) N in place: vertical part within the thrust
+    range, tilt within the limit, magnitude within the largest thrust (vertical first)."""
+    total = 4.0 * v.max_rotor_thrust
+    low, high = g.thrust_range[0] * total, g.thrust_range[1] * total
+    force[2] = min(max(force[2], low), high)
+    _scale_xy(force, force[2] * math.tan(g.tilt_max))
+    _scale_xy(force, math.sqrt(max(high * high - force[2] * force[2], 0.0)))
+
+
+@njit(cache=True)
+def _attitude_setpoint(thrust_direction, yaw):
+    """Attitude (4,) with body z along ``thrust_direction`` (3,, unit) heading ``yaw``."""
+    heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    y_body = np.cross(thrust_direction, heading)
+    norm = np.linalg.norm(y_body)
+    if norm < 1e-6:  # thrust horizontal along the heading: keep any level y
+        y_body = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    else:
+        y_body /= norm
+    x_body = np.cross(y_body, thrust_direction)
+    r = np.empty((3, 3))
+    r[:, 0] = x_body
+    r[:, 1] = y_body
+    r[:, 2] = thrust_direction
+    return quaternion.from_matrix(r)
+
+
+@njit(cache=True)
+def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: GainArrays,
+            v: VehicleArrays, dt: float) -> np.ndarray:
+    """Motor commands (4,) in [0, 1] for the measured ``state`` (17,; rotor speeds are not
+    used) tracking ``reference`` (:data:`REFERENCE_SIZE`,), ``dt`` s after the last call.
+    Updates ``memory`` in place."""
+    started = memory[_STARTED] > 0.0
+    alpha = dt / (dt + 1.0 / (2.0 * math.pi * g.derivative_cutoff))
+    q = state[6:10]
+    r = quaternion.to_matrix(q)
+
+    # 1. position -> velocity setpoint
+    position_error = np.empty(3)
+    v_sp = np.empty(3)
+    for a in range(3):
+        e = reference[a] - state[a]
+        rate = _filtered_rate(memory, _POSITION_ERROR_RATE, _PREVIOUS_POSITION_ERROR, e, a,
+                              dt, alpha, started)
+        position_error[a] = e
+        v_sp[a] = (reference[3 + a] + g.position[0, a] * e + memory[_POSITION_INTEGRAL + a]
+                   + g.position[2, a] * rate)
+    raw_v = v_sp.copy()
+    _scale_xy(v_sp, g.speed_limits[0])
+    v_sp[2] = min(max(v_sp[2], -g.speed_limits[2]), g.speed_limits[1])
+    for a in range(3):
+        if v_sp[a] == raw_v[a]:
+            memory[_POSITION_INTEGRAL + a] = _clip(
+                memory[_POSITION_INTEGRAL + a] + g.position[1, a] * position_error[a] * dt,
+                g.position[3, a])
+
+    # 2. velocity -> acceleration setpoint
+    velocity_error = np.empty(3)
+    a_sp = np.empty(3)
+    for a in range(3):
+        e = v_sp[a] - state[3 + a]
+        measured = _filtered_rate(memory, _ACCELERATION, _PREVIOUS_VELOCITY, state[3 + a], a,
+                                  dt, alpha, started)
+        velocity_error[a] = e
+        a_sp[a] = (reference[6 + a] + g.velocity[0, a] * e + memory[_VELOCITY_INTEGRAL + a]
+                   + g.velocity[2, a] * (reference[6 + a] - measured))
+    _scale_xy(a_sp, g.acceleration_xy)
+
+    # 3. thrust vector, with the drag at the reference velocity as feed-forward
+    drag = np.empty(3)
+    for b in range(3):
+        drag[b] = v.drag[b] * (r[0, b] * reference[3] + r[1, b] * reference[4]
+                               + r[2, b] * reference[5])
+    force = np.empty(3)
+    for a in range(3):
+        force[a] = (v.mass * a_sp[a] + r[a, 0] * drag[0] + r[a, 1] * drag[1]
+                    + r[a, 2] * drag[2])
+    force[2] += v.mass * v.gravity
+    unlimited = force.copy()
+    _thrust_vector(force, v, g)
+    for a in range(3):  # back-calculation: integrate only the error the output can follow
+        taken = (unlimited[a] - force[a]) / v.mass
+        corrected = velocity_error[a] - taken / max(g.velocity[0, a], 1e-9)
+        memory[_VELOCITY_INTEGRAL + a] = _clip(
+            memory[_VELOCITY_INTEGRAL + a] + g.velocity[1, a] * corrected * dt,
+            g.velocity[3, a])
+    magnitude = math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2)
+    collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
+
+    q_sp = _attitude_setpoint(force / magnitude, reference[9])
+    return attitude_control(memory, state, q_sp, collective, reference[10], g, v, dt)
+
+
+@njit(cache=True)
+def attitude_control(memory: np.ndarray, state: np.ndarray, q_sp: np.ndarray,
+                     collective: float, yaw_rate: float, g: GainArrays, v: VehicleArrays,
+                     dt: float) -> np.ndarray:
+    """The inner loops alone: motor commands (4,) in [0, 1] that turn the measured
+    ``state`` (17,) to the attitude ``q_sp`` (4,) with ``collective`` thrust N along body
+    z, plus a world yaw rate feed-forward ``yaw_rate`` rad/s. Updates ``memory``."""
+    started = memory[_STARTED] > 0.0
+    alpha = dt / (dt + 1.0 / (2.0 * math.pi * g.derivative_cutoff))
+    q = state[6:10]
+    r = quaternion.to_matrix(q)
+
+    # 4. attitude -> body rate setpoint
+    q_error = quaternion.multiply(quaternion.conjugate(q), q_sp)
+    sign = 1.0 if q_error[0] >= 0.0 else -1.0
+
+    # 5. body rate -> torque
+    torque = np.empty(3)
+    saturated = memory[MIXER_SATURATED] > 0.0
+    for b in range(3):
+        w_sp = _clip(2.0 * g.attitude_kp[b] * sign * q_error[1 + b] + r[2, b] * yaw_rate,
+                     g.rate_max[b])
+        e = w_sp - state[10 + b]
+        dw = _filtered_rate(memory, _ANGULAR_ACCELERATION, _PREVIOUS_RATES, state[10 + b], b,
+                            dt, alpha, started)
+        torque[b] = v.inertia[b] * (g.rate[0, b] * e + memory[_RATE_INTEGRAL + b]
+                                    - g.rate[2, b] * dw)
+        if not saturated:
+            memory[_RATE_INTEGRAL + b] = _clip(
+                memory[_RATE_INTEGRAL + b] + g.rate[1, b] * e * dt, g.rate[3, b])
+    wx, wy, wz = state[10], state[11], state[12]
+    jx, jy, jz = v.inertia[0] * wx, v.inertia[1] * wy, v.inertia[2] * wz
+    torque[0] += wy * jz - wz * jy
+    torque[1] += wz * jx - wx * jz
+    torque[2] += wx * jy - wy * jx
+
+    # 6. mixer
+    wrench = np.array([collective, torque[0], torque[1], torque[2]])
+    thrusts, changed = mix(wrench, v.mixer, v.max_rotor_thrust)
+    memory[MIXER_SATURATED] = 1.0 if changed else 0.0
+    memory[_STARTED] = 1.0
+    return thrusts / v.max_rotor_thrust

@@ -1,0 +1,160 @@
+"""Controller gains and limits: :class:`Gains`, loadable from TOML.
+
+Gains are per axis ``(x, y, z)`` (world axes for position and velocity, body axes for
+attitude and rate). The position and velocity loops have a P, I and D gain per axis:
+the 18 gains course projects tune by hand. The attitude and rate gains are normalised
+by the vehicle (the rate loop asks for angular accelerations, which the inertia turns
+into torques), so one set serves vehicles of different sizes. The defaults are tuned to
+track minimum-snap trajectories at 2 m/s and more on the ``tello`` preset.
+
+A TOML file sets any keys on top of the defaults, e.g.::
+
+    [position]
+    kp = [1.5, 1.5, 2.0]
+
+    [velocity]
+    ki = [0.5, 0.5, 1.0]
+
+    [limits]
+    tilt_max_deg = 30.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from quadnav.config import from_table, frozen_vector, read_toml, require, vector_field
+from quadnav.errors import QuadnavError
+from quadnav.vehicle.params import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class PID:
+    """Three per-axis PID gains and the integral's bound.
+
+    Attributes:
+        kp: (3,) proportional gains.
+        ki: (3,) integral gains.
+        kd: (3,) derivative gains.
+        integral_limit: (3,) largest magnitude of ``ki`` times the integral, in the
+            loop's output unit.
+    """
+
+    kp: FloatArray = vector_field(0.0, 0.0, 0.0)
+    ki: FloatArray = vector_field(0.0, 0.0, 0.0)
+    kd: FloatArray = vector_field(0.0, 0.0, 0.0)
+    integral_limit: FloatArray = vector_field(1.0, 1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        require([(bool(np.all(getattr(self, k) >= 0)), f"{k} must be >= 0, got "
+                  f"{getattr(self, k).tolist()}") for k in ("kp", "ki", "kd", "integral_limit")])
+
+
+@dataclass(frozen=True, eq=False)
+class Limits:
+    """Saturations of the cascade.
+
+    Attributes:
+        speed_xy: largest horizontal velocity setpoint, m/s.
+        speed_up: largest climb rate setpoint, m/s.
+        speed_down: largest descent rate setpoint, m/s.
+        acceleration_xy: largest horizontal acceleration setpoint, m/s^2.
+        tilt_max_deg: largest angle between the thrust and the vertical, degrees.
+        thrust_min: smallest collective thrust, fraction of the rotors' total.
+        thrust_max: largest collective thrust, fraction of the total (the rest is kept
+            for attitude control).
+        rate_max_deg: (3,) largest body rate setpoints about x, y, z, degrees/s.
+        derivative_cutoff_hz: cut-off of the first-order filters on derivative terms, Hz.
+    """
+
+    speed_xy: float = 8.0
+    speed_up: float = 3.0
+    speed_down: float = 2.0
+    acceleration_xy: float = 12.0
+    tilt_max_deg: float = 45.0
+    thrust_min: float = 0.05
+    thrust_max: float = 0.9
+    rate_max_deg: FloatArray = vector_field(360.0, 360.0, 180.0)
+    derivative_cutoff_hz: float = 30.0
+
+    def __post_init__(self) -> None:
+        positive = ("speed_xy", "speed_up", "speed_down", "acceleration_xy",
+                    "derivative_cutoff_hz")
+        require([(getattr(self, k) > 0, f"{k} must be > 0, got {getattr(self, k)}")
+                  for k in positive] + [
+            (0 < self.tilt_max_deg < 90, f"tilt_max_deg must be in (0, 90), got "
+                                         f"{self.tilt_max_deg}"),
+            (0 <= self.thrust_min < self.thrust_max <= 1,
+             f"expected 0 <= thrust_min < thrust_max <= 1, got {self.thrust_min} and "
+             f"{self.thrust_max}"),
+            (bool(np.all(self.rate_max_deg > 0)), "rate_max_deg must be > 0"),
+        ])
+
+
+def _pid(kp: tuple, ki: tuple = (0.0,) * 3, kd: tuple = (0.0,) * 3,
+         integral_limit: tuple = (1.0,) * 3) -> PID:
+    return PID(*(frozen_vector(v, 3) for v in (kp, ki, kd, integral_limit)))
+
+
+@dataclass(frozen=True, eq=False)
+class Gains:
+    """The cascade's gains: position -> velocity -> attitude -> body rate.
+
+    Attributes:
+        position: position error (m) to velocity setpoint (m/s) PID, world axes.
+        velocity: velocity error (m/s) to acceleration setpoint (m/s^2) PID, world axes.
+        attitude_kp: (3,) attitude error (rad) to body rate setpoint (rad/s), body axes.
+        rate: body rate error (rad/s) to angular acceleration (rad/s^2) PID, body axes.
+        limits: saturations.
+    """
+
+    position: PID = field(default_factory=lambda: _pid((1.8, 1.8, 2.5)))
+    velocity: PID = field(default_factory=lambda: _pid(
+        (5.0, 5.0, 6.0), (1.0, 1.0, 2.0), (0.05, 0.05, 0.0), (3.0, 3.0, 4.0)))
+    attitude_kp: FloatArray = vector_field(12.0, 12.0, 5.0)
+    rate: PID = field(default_factory=lambda: _pid(
+        (40.0, 40.0, 15.0), (10.0, 10.0, 5.0), (0.3, 0.3, 0.0), (30.0, 30.0, 10.0)))
+    limits: Limits = field(default_factory=Limits)
+
+    def replace(self, **changes: object) -> Gains:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        """JSON-ready nested dict, the layout of a gains TOML file."""
+        def plain(value):
+            if dataclasses.is_dataclass(value):
+                return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+            return value.tolist() if isinstance(value, np.ndarray) else value
+        return plain(self)
+
+
+def gain_preset_names() -> list[str]:
+    """Names of the shipped gain sets: ``tello`` (the defaults) and one per vehicle preset
+    that needs its own."""
+    return sorted(["tello"] + [p.name.removesuffix(".toml") for p in _presets().iterdir()
+                               if p.name.endswith(".toml")])
+
+
+def _presets():
+    return resources.files("quadnav.control") / "presets"
+
+
+def load_gains(path: str | Path | None = None, preset: str = "tello") -> Gains:
+    """The gain set ``preset`` (see :func:`gain_preset_names`), with the keys of the TOML
+    file at ``path`` (if any) set on top."""
+    if preset not in gain_preset_names():
+        raise QuadnavError(f"unknown gain set {preset!r}; expected one of "
+                           f"{', '.join(gain_preset_names())}")
+    gains = Gains()
+    if preset != "tello":
+        with resources.as_file(_presets() / f"{preset}.toml") as real:
+            gains = from_table(gains, read_toml(real), f"gain set {preset}")
+    if path is None:
+        return gains
+    return from_table(gains, read_toml(path), str(path))

@@ -1,0 +1,207 @@
+"""The whole pipeline, World -> Path -> Trajectory -> Flight: :func:`fly_mission`.
+
+Plan with RRT* (or an OMPL planner), shortcut and smooth the path, make a
+minimum-snap trajectory that keeps the margin, and fly it in simulation against the real
+(uninflated) map. :meth:`Mission.metrics` summarises the outcome for reports and
+``metrics.json``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from quadnav.control.gains import Gains
+from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
+from quadnav.planning.refine import refine
+from quadnav.sim.flight import Ending, Flight
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
+from quadnav.trajectory.generate import TrajectorySettings, checking_world, make_trajectory
+from quadnav.trajectory.model import Trajectory
+from quadnav.vehicle.params import VehicleParams, load_params
+from quadnav.world.model import World
+
+#: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2.
+DEFAULT_SPEED = 2.0
+DEFAULT_ACCELERATION = 3.0
+#: Search budget of a mission: samples, and a wall-time cap in seconds. The sample
+#: count binds on the built-in worlds, so the same seed flies the same flight.
+DEFAULT_ITERATIONS = 50_000
+DEFAULT_TIME_CAP = 10.0
+
+
+def _default_planner() -> PlannerSettings:
+    return PlannerSettings(max_iterations=DEFAULT_ITERATIONS, time_limit=DEFAULT_TIME_CAP)
+
+
+def _default_trajectory() -> TrajectorySettings:
+    return TrajectorySettings(v_max=DEFAULT_SPEED, a_max=DEFAULT_ACCELERATION)
+
+
+@dataclass(frozen=True, eq=False)
+class MissionSettings:
+    """Everything a mission needs besides the map and the query.
+
+    Attributes:
+        planner: planner name (``rrtstar`` or ``ompl:NAME``).
+        planning: the planner's budget, seed and tuning.
+        refine: shortcut and smooth the path before making the trajectory.
+        trajectory: generator and limits (``v_max`` is the cruise speed).
+        vehicle: the simulated quadrotor.
+        gains: the controller.
+        sim: rates, stopping and success rules, disturbances, seed.
+    """
+
+    planner: str = "rrtstar"
+    planning: PlannerSettings = field(default_factory=_default_planner)
+    refine: bool = True
+    trajectory: TrajectorySettings = field(default_factory=_default_trajectory)
+    vehicle: VehicleParams = field(default_factory=load_params)
+    gains: Gains = field(default_factory=Gains)
+    sim: SimSettings = field(default_factory=SimSettings)
+
+
+@dataclass(frozen=True, eq=False)
+class Mission:
+    """The outcome of every stage.
+
+    Attributes:
+        problem: the checked query (world, margin, start, goal).
+        plan: the planner's result after refinement (``plan.solved`` False: no path).
+        raw_length: path length before refinement, m (inf without a path).
+        trajectory: the reference flown (None without a path).
+        margin_kept: clearance the trajectory was made to keep, m (below the margin when
+            a start or goal lies inside it).
+        flight: the simulated flight (None without a path).
+        timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``.
+        settings: what the mission ran with.
+    """
+
+    problem: PlanningProblem
+    plan: PlanResult
+    raw_length: float
+    trajectory: Trajectory | None
+    margin_kept: float | None
+    flight: Flight | None
+    timings: dict[str, float]
+    settings: MissionSettings
+
+    @property
+    def success(self) -> bool:
+        """Goal reached within tolerance with no collision."""
+        return self.flight is not None and flight_succeeded(self.flight,
+                                                             self.settings.sim.goal_tolerance)
+
+    def metrics(self) -> dict:
+        """JSON-ready summary (see the README's list of ``metrics.json`` keys)."""
+        problem, flight = self.problem, self.flight
+        out = {
+            "success": self.success,
+            "map": problem.world.name,
+            "start": problem.start.tolist(),
+            "goal": problem.goal.tolist(),
+            "margin_m": problem.margin,
+            "margin_kept_m": self.margin_kept,
+            "planner": self.plan.planner,
+            "seed": self.plan.seed,
+            "vehicle": self.settings.vehicle.name,
+            "speed_m_s": self.settings.trajectory.v_max,
+            "path_found": self.plan.solved,
+            "path_length_m": self.plan.length if self.plan.solved else None,
+            "path_vertices": len(self.plan.path) if self.plan.solved else 0,
+            "planning_time_s": self.timings["planning"],
+            "trajectory_time_s": self.timings.get("trajectory"),
+            "trajectory_duration_s": self.trajectory.duration if self.trajectory else None,
+        }
+        return out | (flight_metrics(flight, problem.world, self.settings.sim)
+                      if flight is not None else {"collision": False, "reached_goal": False})
+
+
+def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
+    """Whether the flight ran to the end without contact and ended near the goal."""
+    return flight.ending is Ending.COMPLETED and flight.final_error <= goal_tolerance
+
+
+def min_clearance(flight: Flight, world: World) -> float | None:
+    """Closest approach of the vehicle's centre to a real block's surface over the
+    recorded samples, m (None for a map with no blocks)."""
+    if len(world.blocks) == 0:
+        return None
+    open_world = world.replace(boundary=world.boundary + np.repeat([-1e6, 1e6], 3))
+    return float(open_world.clearances(flight.position).min())
+
+
+def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
+    """The flight's part of :meth:`Mission.metrics`."""
+    return {
+        "collision": flight.ending is Ending.COLLISION,
+        "reached_goal": flight.final_error <= settings.goal_tolerance,
+        "ending": flight.ending.value,
+        "contact_time_s": flight.contact_time,
+        "contact_block": flight.contact_block,
+        "final_error_m": flight.final_error,
+        "goal_tolerance_m": settings.goal_tolerance,
+        "flight_time_s": flight.duration,
+        "rms_tracking_error_m": flight.rms_tracking_error,
+        "max_tracking_error_m": flight.max_tracking_error,
+        "max_velocity_error_m_s": flight.max_velocity_error,
+        "min_clearance_m": min_clearance(flight, world),
+        "mixer_saturation": flight.mixer_saturation,
+        "sim_wall_time_s": flight.wall_time,
+        "real_time_factor": flight.duration / flight.wall_time if flight.wall_time else None,
+    }
+
+
+def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | None = None,
+                margin: float | None = None, settings: MissionSettings | None = None,
+                planning_progress: Callable[[float, float], None] | None = None,
+                flight_progress: Callable[[float], None] | None = None) -> Mission:
+    """Plan, smooth, make a trajectory and fly it.
+
+    Args:
+        world: the real map.
+        start: (3,) m, or None for the map's own.
+        goal: (3,) m, or None for the map's own.
+        margin: safety margin, m (None: the map's own, else 0.2).
+        settings: see :class:`MissionSettings`.
+        planning_progress: called with (fraction of the budget, best length m).
+        flight_progress: called with the fraction of the flight simulated.
+
+    Raises:
+        QuadnavError: a bad query (a start in a block, a goal outside the map, a start
+            and goal provably disconnected).
+    """
+    if margin is None:
+        margin = world.margin if world.margin is not None else 0.2
+    return fly_problem(make_problem(world, start, goal, margin), settings, planning_progress,
+                       flight_progress)
+
+
+def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = None,
+                planning_progress: Callable[[float, float], None] | None = None,
+                flight_progress: Callable[[float], None] | None = None) -> Mission:
+    """:func:`fly_mission` for a query already checked by
+    :func:`~quadnav.planning.make_problem` (so bad input fails before any work)."""
+    settings = settings or MissionSettings()
+    world = problem.world
+    began = time.perf_counter()
+    result = plan(problem, settings.planning, settings.planner, planning_progress)
+    raw_length = result.length
+    if settings.refine and result.solved:
+        result = refine(problem, result)
+    timings = {"planning": time.perf_counter() - began}
+    if not result.solved:
+        return Mission(problem, result, raw_length, None, None, None, timings, settings)
+    began = time.perf_counter()
+    free_world, kept = checking_world(world, problem.margin, result.path)
+    trajectory = make_trajectory(result.path, settings.trajectory, free_world)
+    timings["trajectory"] = time.perf_counter() - began
+    flight = simulate(trajectory, settings.vehicle, settings.gains, world, settings.sim,
+                      flight_progress)
+    timings["simulation"] = flight.wall_time
+    return Mission(problem, result, raw_length, trajectory, kept, flight, timings, settings)

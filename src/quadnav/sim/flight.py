@@ -1,0 +1,89 @@
+"""What a simulated flight returns: :class:`Flight`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from quadnav.vehicle.params import FloatArray
+
+
+class Ending(Enum):
+    """Why a flight stopped."""
+
+    COMPLETED = "completed"  # the trajectory's end plus the settling time
+    COLLISION = "collision"  # the body box touched a real block
+    LEFT_BOUNDARY = "left boundary"  # the centre left the map's boundary
+    DIVERGED = "diverged"  # a non-finite state or the vehicle upside down
+
+
+@dataclass(frozen=True, eq=False)
+class Flight:
+    """A flight record, sampled at the record rate, plus the final state.
+
+    Attributes:
+        t: (N,) times, s, from the start of the trajectory.
+        states: (N, 17) vehicle states (layout of :mod:`quadnav.vehicle.dynamics`).
+        commands: (N, 4) motor commands in [0, 1] held from each sample on.
+        reference: (N, 11) reference at each sample: position m, velocity m/s,
+            acceleration m/s^2, yaw rad, yaw rate rad/s.
+        goal: (3,) where the trajectory ends, m.
+        ending: why it stopped.
+        contact_time: when it collided, left the boundary or diverged, s (else None).
+        contact_block: row of the real block touched, for a collision (else None).
+        rms_tracking_error: root mean square of the position error over every control
+            step, m.
+        max_tracking_error: largest position error at any control step, m.
+        max_velocity_error: largest velocity error at any control step, m/s.
+        mixer_saturation: fraction of control steps at which the mixer had to change
+            the wrench.
+        wall_time: seconds the simulation took.
+        info: the settings and vehicle used, JSON-ready.
+    """
+
+    t: FloatArray
+    states: FloatArray
+    commands: FloatArray
+    reference: FloatArray
+    goal: FloatArray
+    ending: Ending
+    contact_time: float | None
+    contact_block: int | None
+    rms_tracking_error: float
+    max_tracking_error: float
+    max_velocity_error: float
+    mixer_saturation: float
+    wall_time: float
+    info: dict = field(default_factory=dict)
+
+    @property
+    def position(self) -> FloatArray:
+        """(N, 3) positions, m."""
+        return self.states[:, 0:3]
+
+    @property
+    def velocity(self) -> FloatArray:
+        """(N, 3) velocities, m/s."""
+        return self.states[:, 3:6]
+
+    @property
+    def attitude(self) -> FloatArray:
+        """(N, 4) attitude quaternions ``(w, x, y, z)``."""
+        return self.states[:, 6:10]
+
+    @property
+    def duration(self) -> float:
+        """Flight time, s."""
+        return float(self.t[-1])
+
+    @property
+    def final_error(self) -> float:
+        """Distance from the final position to the goal, m."""
+        return float(np.linalg.norm(self.states[-1, 0:3] - self.goal))
+
+    @property
+    def tracking_error(self) -> FloatArray:
+        """(N,) position error at each sample, m."""
+        return np.linalg.norm(self.position - self.reference[:, 0:3], axis=1)

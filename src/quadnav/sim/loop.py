@@ -1,0 +1,115 @@
+"""The closed loop, compiled with numba: sensors -> controller -> RK4 physics -> checks.
+
+:func:`fly_steps` runs control steps ``first..last`` in place on the state and the
+controller memory, so a driver can run a flight in chunks (for a progress bar) at no
+cost. Each control step: add the measurement noise; run the cascade; accumulate the
+tracking error; record every ``record_every``-th step; then ``substeps`` RK4 steps, each
+followed by the stop checks (non-finite or upside-down state, centre outside the
+boundary, body box touching a real block).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from quadnav.control.cascade import MIXER_SATURATED, GainArrays, control
+from quadnav.sim.collision import touched_block
+from quadnav.vehicle import quaternion
+from quadnav.vehicle.dynamics import VehicleArrays, rk4_step
+
+#: Stop codes returned by :func:`fly_steps` (see :class:`~quadnav.sim.flight.Ending`).
+RUNNING, COLLISION, LEFT_BOUNDARY, DIVERGED = 0, 1, 2, 3
+#: Layout of the statistics array (:data:`STATS_SIZE`,).
+SUM_SQUARED_ERROR, MAX_ERROR, MAX_VELOCITY_ERROR, STEPS, SATURATED, CONTACT_BLOCK = range(6)
+STATS_SIZE = 6
+
+
+@njit(cache=True)
+def _measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """The state as the sensors see it: noise (12,) on position, velocity, attitude
+    (a small rotation) and body rates."""
+    out = state.copy()
+    out[0:6] += noise[0:6]
+    out[6:10] = quaternion.multiply(state[6:10], quaternion.from_rotation_vector(noise[6:9]))
+    out[10:13] += noise[9:12]
+    return out
+
+
+@njit(cache=True)
+def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
+    for value in state:
+        if not math.isfinite(value):
+            return DIVERGED
+    r = quaternion.to_matrix(state[6:10])
+    if r[2, 2] < 0.0:
+        return DIVERGED
+    for a in range(3):
+        if not boundary[a] <= state[a] <= boundary[a + 3]:
+            return LEFT_BOUNDARY
+    block = touched_block(state[0:3], r, v.half_size, blocks, grid)
+    if block >= 0:
+        stats[CONTACT_BLOCK] = block
+        return COLLISION
+    return RUNNING
+
+
+@njit(cache=True)
+def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
+              references: np.ndarray, v: VehicleArrays, g: GainArrays, substeps: int,
+              dt_control: float, floor_z: float, forces: np.ndarray, noise: np.ndarray,
+              noisy: bool, boundary: np.ndarray, blocks: np.ndarray, grid,
+              record_every: int, record_states: np.ndarray, record_commands: np.ndarray,
+              stats: np.ndarray) -> tuple[int, int]:
+    """Run control steps ``first..last - 1``; returns (stop code, steps done).
+
+    Args:
+        state: (17,) vehicle state, updated in place.
+        memory: controller memory, updated in place.
+        first: first control step to run (its index into the per-step tables).
+        last: one past the last control step to run.
+        references: (K, 11) reference per control step (the last row is held after).
+        v: the vehicle (:func:`~quadnav.vehicle.dynamics.vehicle_arrays`).
+        g: the gains (:func:`~quadnav.control.cascade.gain_arrays`).
+        substeps: RK4 steps per control step.
+        dt_control: control period, s.
+        floor_z: height of the floor, m (-inf: none).
+        forces: (K, 3) external force per control step, N.
+        noise: (K, 12) measurement noise per control step.
+        noisy: whether to add ``noise`` (skipped when all zero).
+        boundary: (6,) the box the centre must stay in, m.
+        blocks: (N, 6) real blocks.
+        grid: :func:`~quadnav.sim.collision.body_grid` of ``blocks``.
+        record_every: control steps per recorded row.
+        record_states: (R, 17) recorded states: row ``k // record_every`` is written at
+            control steps ``k`` divisible by ``record_every``.
+        record_commands: (R, 4) recorded motor commands, likewise.
+        stats: (:data:`STATS_SIZE`,) running tracking statistics, updated in place.
+    """
+    dt = dt_control / substeps
+    last_reference = references.shape[0] - 1
+    for k in range(first, last):
+        reference = references[min(k, last_reference)]
+        seen = _measured(state, noise[k]) if noisy else state
+        commands = control(memory, seen, reference, g, v, dt_control)
+        error = 0.0
+        velocity_error = 0.0
+        for a in range(3):
+            error += (state[a] - reference[a]) ** 2
+            velocity_error += (state[3 + a] - reference[3 + a]) ** 2
+        stats[SUM_SQUARED_ERROR] += error
+        stats[MAX_ERROR] = max(stats[MAX_ERROR], math.sqrt(error))
+        stats[MAX_VELOCITY_ERROR] = max(stats[MAX_VELOCITY_ERROR], math.sqrt(velocity_error))
+        stats[STEPS] += 1.0
+        stats[SATURATED] += memory[MIXER_SATURATED]
+        if k % record_every == 0:
+            record_states[k // record_every] = state
+            record_commands[k // record_every] = commands
+        for _ in range(substeps):
+            rk4_step(state, commands, v, forces[k], dt, floor_z)
+            code = _stop_code(state, v, boundary, blocks, grid, stats)
+            if code != RUNNING:
+                return code, k + 1 - first
+    return RUNNING, last - first

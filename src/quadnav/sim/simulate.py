@@ -1,0 +1,137 @@
+"""Fly a trajectory in simulation: :func:`simulate`.
+
+The trajectory is sampled once at the control rate into a reference table (position,
+velocity, acceleration, yaw, yaw rate; held at the end during the settling time); the
+wind, gusts and sensor noise are drawn up front from ``settings.seed``; then the
+compiled loop (:mod:`quadnav.sim.loop`) runs in chunks of :data:`CHUNK_SECONDS` of
+flight, calling ``progress`` in between.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from quadnav.control.cascade import gain_arrays, new_memory
+from quadnav.control.gains import Gains
+from quadnav.sim import loop
+from quadnav.sim.collision import body_grid
+from quadnav.sim.flight import Ending, Flight
+from quadnav.sim.settings import SimSettings
+from quadnav.trajectory.model import Trajectory
+from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, vehicle_arrays
+from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
+from quadnav.world.model import World
+
+#: Simulated seconds per call of the compiled loop.
+CHUNK_SECONDS = 1.0
+_ENDINGS = {loop.COLLISION: Ending.COLLISION, loop.LEFT_BOUNDARY: Ending.LEFT_BOUNDARY,
+            loop.DIVERGED: Ending.DIVERGED}
+
+
+def reference_table(trajectory: Trajectory, dt: float, steps: int) -> FloatArray:
+    """(steps, 11) reference rows at times ``k dt``: position, velocity, acceleration,
+    yaw, yaw rate (the yaw's finite difference)."""
+    t = np.arange(steps) * dt
+    yaw = np.unwrap(np.broadcast_to(trajectory.yaw(t), t.shape))
+    yaw_rate = np.gradient(yaw, dt) if steps > 1 else np.zeros(steps)
+    return np.column_stack([trajectory.position(t), trajectory.velocity(t),
+                            trajectory.acceleration(t), yaw, yaw_rate])
+
+
+def _disturbances(settings: SimSettings, steps: int, dt: float) -> tuple[FloatArray, FloatArray]:
+    """External forces (steps, 3) N and measurement noise (steps, 12), from the seed."""
+    rng = np.random.default_rng(settings.seed)
+    forces = np.tile(settings.wind, (steps, 1))
+    if settings.gust_std > 0:
+        per_gust = max(1, round(settings.gust_period / dt))
+        gusts = rng.normal(0.0, settings.gust_std, ((steps + per_gust - 1) // per_gust, 3))
+        forces += np.repeat(gusts, per_gust, axis=0)[:steps]
+    noise = np.zeros((steps, 12))
+    if settings.noisy:
+        scale = np.repeat([settings.position_noise, settings.velocity_noise,
+                           settings.attitude_noise, settings.gyro_noise], 3)
+        noise = rng.normal(0.0, 1.0, (steps, 12)) * scale
+    return forces, noise
+
+
+def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
+             gains: Gains | None = None, world: World | None = None,
+             settings: SimSettings | None = None,
+             progress: Callable[[float], None] | None = None,
+             initial_state: FloatArray | None = None) -> Flight:
+    """Fly ``trajectory`` from a hover at its start through the cascade and the dynamics.
+
+    Args:
+        trajectory: the reference.
+        params: the vehicle (default: the ``tello`` preset).
+        gains: the controller (default: :class:`~quadnav.control.gains.Gains`).
+        world: the real (uninflated) map: its blocks are obstacles, its boundary the box
+            the centre must stay in (within ``settings.boundary_tolerance``) and its lower
+            face the floor. ``None``: open space, no floor.
+        settings: rates, stopping and success rules, disturbances.
+        progress: called with the fraction of the flight done, after each chunk.
+        initial_state: (17,) state to start from instead of the hover at the start (see
+            :mod:`quadnav.vehicle.dynamics`), e.g. to fly a step response.
+    """
+    params = params or load_params()
+    gains = gains or Gains()
+    settings = settings or SimSettings()
+    began = time.perf_counter()
+    dt = 1.0 / settings.control_rate
+    steps = int(np.ceil((trajectory.duration + settings.settle_time) / dt - 1e-9)) + 1
+    references = reference_table(trajectory, dt, steps)
+    forces, noise = _disturbances(settings, steps, dt)
+    vehicle = vehicle_arrays(params)
+    state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
+             else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
+    memory = new_memory()
+    if world is None:
+        boundary = np.array([-np.inf] * 3 + [np.inf] * 3)
+        world_blocks = np.zeros((0, 6))
+        grid_world = World(np.array([-1.0, -1, -1, 1, 1, 1]))
+        floor_z = -np.inf
+    else:
+        boundary = world.boundary + np.repeat([-1.0, 1.0], 3) * settings.boundary_tolerance
+        world_blocks = np.array(world.blocks)
+        grid_world = world
+        floor_z = float(world.lower[2])
+    grid = body_grid(grid_world, vehicle.half_size)
+    every = settings.record_every
+    rows = (steps + every - 1) // every
+    record_states = np.zeros((rows, STATE_SIZE))
+    record_commands = np.zeros((rows, 4))
+    stats = np.zeros(loop.STATS_SIZE)
+    stats[loop.CONTACT_BLOCK] = -1
+    chunk = max(1, round(CHUNK_SECONDS / dt))
+    done, code = 0, loop.RUNNING
+    while done < steps and code == loop.RUNNING:
+        last = min(done + chunk, steps)
+        code, ran = loop.fly_steps(
+            state, memory, done, last, references, vehicle, gain_arrays(gains),
+            settings.substeps, dt, floor_z, forces, noise, settings.noisy, boundary,
+            world_blocks, grid, every, record_states, record_commands, stats)
+        done += ran
+        if progress is not None:
+            progress(done / steps)
+    kept = (done - 1) // every + 1
+    t = np.append(np.arange(kept) * every * dt, done * dt)
+    ending = _ENDINGS.get(code, Ending.COMPLETED)
+    count = max(stats[loop.STEPS], 1.0)
+    return Flight(
+        t=t, states=np.vstack([record_states[:kept], state]),
+        commands=np.vstack([record_commands[:kept], record_commands[kept - 1]]),
+        reference=np.vstack([references[::every][:kept], references[min(done, steps - 1)]]),
+        goal=np.array(trajectory.position(trajectory.duration)), ending=ending,
+        contact_time=None if ending is Ending.COMPLETED else done * dt,
+        contact_block=(int(stats[loop.CONTACT_BLOCK]) if ending is Ending.COLLISION
+                       else None),
+        rms_tracking_error=float(np.sqrt(stats[loop.SUM_SQUARED_ERROR] / count)),
+        max_tracking_error=float(stats[loop.MAX_ERROR]),
+        max_velocity_error=float(stats[loop.MAX_VELOCITY_ERROR]),
+        mixer_saturation=float(stats[loop.SATURATED] / count),
+        wall_time=time.perf_counter() - began,
+        info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
+              "control_rate_hz": settings.control_rate, "seed": settings.seed})

@@ -1,0 +1,148 @@
+"""6-DOF rigid-body dynamics of the quadrotor with motors, integrated by fixed-step RK4.
+
+State (17,) float64, world frame z up, body frame x forward, z up:
+
+=========  ==========  ===================================================
+indices    name        meaning
+=========  ==========  ===================================================
+0:3        position    centre of mass, m
+3:6        velocity    m/s, world frame
+6:10       attitude    unit quaternion ``(w, x, y, z)``, body to world
+10:13      rates       body angular velocity, rad/s
+13:17      rotors      rotor speeds, rad/s (rotor order of :mod:`.rotors`)
+=========  ==========  ===================================================
+
+Forces: rotor thrust along body z, gravity, linear drag ``-R D R^T v`` (``D`` the body-frame
+drag coefficients) and an external world-frame force (wind, a push). A solid floor at
+``floor_z`` holds the centre of mass up: on touching it, the vehicle stops sinking and
+sliding and its body rates stop.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from quadnav.vehicle import quaternion
+from quadnav.vehicle.params import FloatArray, VehicleParams
+from quadnav.vehicle.rotors import SPIN, allocation_matrix
+
+STATE_SIZE = 17
+POSITION = slice(0, 3)
+VELOCITY = slice(3, 6)
+ATTITUDE = slice(6, 10)
+RATES = slice(10, 13)
+ROTORS = slice(13, 17)
+
+
+class VehicleArrays(NamedTuple):
+    """:class:`~quadnav.vehicle.params.VehicleParams` as plain numbers and arrays, the form
+    compiled code takes (see :func:`vehicle_arrays`)."""
+
+    mass: float
+    inertia: np.ndarray  # (3,) kg m^2
+    thrust_coefficient: float
+    torque_coefficient: float
+    rotor_speed_max: float
+    motor_time_constant: float
+    drag: np.ndarray  # (3,) N/(m/s), body axes
+    gravity: float
+    spin: np.ndarray  # (4,) +1 counter-clockwise
+    allocation: np.ndarray  # (4, 4) thrusts -> wrench
+    mixer: np.ndarray  # (4, 4) wrench -> thrusts
+    max_rotor_thrust: float
+    half_size: np.ndarray  # (3,) half the collision box, m
+
+
+def vehicle_arrays(params: VehicleParams) -> VehicleArrays:
+    """The compiled-code form of ``params``."""
+    allocation = allocation_matrix(params)
+    return VehicleArrays(
+        params.mass, np.array(params.inertia), params.thrust_coefficient,
+        params.torque_coefficient, params.rotor_speed_max, params.motor_time_constant,
+        np.array(params.drag), params.gravity, SPIN.copy(), allocation,
+        np.linalg.inv(allocation), params.max_rotor_thrust, 0.5 * np.array(params.body_size))
+
+
+def hover_state(params: VehicleParams, position, yaw: float = 0.0) -> FloatArray:
+    """State (17,) at rest at ``position`` (3,) m heading ``yaw`` rad, rotors at hover."""
+    state = np.zeros(STATE_SIZE)
+    state[POSITION] = position
+    state[ATTITUDE] = quaternion.from_yaw(yaw)
+    state[ROTORS] = params.rotor_speed_max * math.sqrt(params.hover_command)
+    return state
+
+
+@njit(cache=True)
+def derivative(x: np.ndarray, rotor_command: np.ndarray, v: VehicleArrays,
+               force: np.ndarray, out: np.ndarray) -> None:
+    """Write d state / dt (17,) into ``out`` for rotor speed commands (4,) rad/s and an
+    external force (3,) N. Scalar arithmetic only: it runs four times per RK4 step."""
+    qw, qx, qy, qz = x[6], x[7], x[8], x[9]
+    wx, wy, wz = x[10], x[11], x[12]
+    r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
+    r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
+    r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
+    # drag: body-frame coefficients on the body-frame velocity, back to the world frame
+    dx = v.drag[0] * (r00 * x[3] + r10 * x[4] + r20 * x[5])
+    dy = v.drag[1] * (r01 * x[3] + r11 * x[4] + r21 * x[5])
+    dz = v.drag[2] * (r02 * x[3] + r12 * x[4] + r22 * x[5])
+    total = 0.0
+    tau_x = 0.0
+    tau_y = 0.0
+    tau_z = 0.0
+    for i in range(4):
+        squared = x[13 + i] * x[13 + i]
+        thrust = v.thrust_coefficient * squared
+        total += thrust
+        tau_x += v.allocation[1, i] * thrust
+        tau_y += v.allocation[2, i] * thrust
+        tau_z -= v.spin[i] * v.torque_coefficient * squared
+        out[13 + i] = (rotor_command[i] - x[13 + i]) / v.motor_time_constant
+    out[0], out[1], out[2] = x[3], x[4], x[5]
+    out[3] = (r02 * total - (r00 * dx + r01 * dy + r02 * dz) + force[0]) / v.mass
+    out[4] = (r12 * total - (r10 * dx + r11 * dy + r12 * dz) + force[1]) / v.mass
+    out[5] = (r22 * total - (r20 * dx + r21 * dy + r22 * dz) + force[2]) / v.mass - v.gravity
+    out[6] = 0.5 * (-qx * wx - qy * wy - qz * wz)
+    out[7] = 0.5 * (qw * wx + qy * wz - qz * wy)
+    out[8] = 0.5 * (qw * wy - qx * wz + qz * wx)
+    out[9] = 0.5 * (qw * wz + qx * wy - qy * wx)
+    jx, jy, jz = v.inertia[0], v.inertia[1], v.inertia[2]
+    out[10] = (tau_x - (wy * jz * wz - wz * jy * wy)) / jx
+    out[11] = (tau_y - (wz * jx * wx - wx * jz * wz)) / jy
+    out[12] = (tau_z - (wx * jy * wy - wy * jx * wx)) / jz
+
+
+@njit(cache=True)
+def rotor_speed_commands(commands: np.ndarray, v: VehicleArrays) -> np.ndarray:
+    """Rotor speeds (4,) rad/s asked for by motor commands (4,) in [0, 1] (clipped)."""
+    return v.rotor_speed_max * np.sqrt(np.minimum(np.maximum(commands, 0.0), 1.0))
+
+
+@njit(cache=True)
+def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.ndarray,
+             dt: float, floor_z: float) -> None:
+    """Advance the state ``x`` (17,) in place by ``dt`` s holding motor commands (4,) and
+    force (3,) N: one RK4 step, then the quaternion renormalised and the floor applied."""
+    target = rotor_speed_commands(commands, v)
+    k = np.empty((4, STATE_SIZE))
+    stage = np.empty(STATE_SIZE)
+    derivative(x, target, v, force, k[0])
+    for step, weight in ((1, 0.5), (2, 0.5), (3, 1.0)):
+        for i in range(STATE_SIZE):
+            stage[i] = x[i] + weight * dt * k[step - 1, i]
+        derivative(stage, target, v, force, k[step])
+    for i in range(STATE_SIZE):
+        x[i] += dt / 6.0 * (k[0, i] + 2.0 * k[1, i] + 2.0 * k[2, i] + k[3, i])
+    norm = math.sqrt(x[6] ** 2 + x[7] ** 2 + x[8] ** 2 + x[9] ** 2)
+    for i in range(6, 10):
+        x[i] /= norm
+    if x[2] < floor_z:
+        x[2] = floor_z
+        x[3] = 0.0
+        x[4] = 0.0
+        x[5] = max(x[5], 0.0)
+        x[10:13] = 0.0

@@ -1,0 +1,140 @@
+"""The quadrotor's physical parameters: :class:`VehicleParams`, presets and TOML files.
+
+Rotor model: rotor ``i`` spinning at ``w_i`` rad/s pushes ``k_f w_i^2`` N along the body
+z axis and twists the body about z by ``-s_i k_m w_i^2`` N m, where ``s_i`` is +1 for a
+rotor spinning counter-clockwise seen from above. A motor command ``u`` in [0, 1] asks
+for ``u`` times the rotor's largest thrust (as the RBE595 starter's ``U``): the rotor
+speed chases ``w_max sqrt(u)`` with a first-order lag.
+
+Presets are TOML files shipped in ``quadnav/vehicle/presets`` (``tello``, ``rbe595``);
+each states its sources. A user's file sets any keys on top of the preset named by its
+``based_on`` key (default ``tello``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from quadnav.config import from_table, read_toml, require, vector_field
+from quadnav.errors import QuadnavError
+
+FloatArray = NDArray[np.float64]
+
+#: Standard gravity, m/s^2.
+GRAVITY = 9.81
+#: The preset used when none is named.
+DEFAULT_PRESET = "tello"
+
+
+
+@dataclass(frozen=True, eq=False)
+class VehicleParams:
+    """A quadrotor in the X configuration.
+
+    Attributes:
+        name: preset or file name, for reports.
+        mass: kg.
+        inertia: (3,) principal moments of inertia about body x, y, z, kg m^2.
+        arm_length: distance from the centre of mass to each rotor axis, m.
+        thrust_coefficient: ``k_f``, N / (rad/s)^2.
+        torque_coefficient: ``k_m``, N m / (rad/s)^2.
+        rotor_speed_max: largest rotor speed, rad/s.
+        motor_time_constant: first-order lag of the rotor speed, s.
+        drag: (3,) linear drag coefficients along body x, y, z, N / (m/s).
+        body_size: (3,) size of the collision box along body x, y, z, m.
+        gravity: m/s^2.
+        gains: name of the controller gain set tuned for this vehicle (see
+            :func:`quadnav.control.gains.gain_preset_names`).
+    """
+
+    name: str = "custom"
+    mass: float = 0.08
+    inertia: FloatArray = vector_field(9.0e-5, 9.0e-5, 1.7e-4)
+    arm_length: float = 0.06
+    thrust_coefficient: float = 1.8e-7
+    torque_coefficient: float = 1.03e-9
+    rotor_speed_max: float = 1490.0
+    motor_time_constant: float = 0.02
+    drag: FloatArray = vector_field(0.04, 0.04, 0.06)
+    body_size: FloatArray = vector_field(0.10, 0.10, 0.05)
+    gravity: float = GRAVITY
+    gains: str = "tello"
+
+    def __post_init__(self) -> None:
+        positive = ("mass", "arm_length", "thrust_coefficient", "torque_coefficient",
+                    "rotor_speed_max", "motor_time_constant", "gravity")
+        require([(math.isfinite(getattr(self, key)) and getattr(self, key) > 0,
+                  f"{key} must be > 0, got {getattr(self, key)}") for key in positive] + [
+            (bool(np.all(self.inertia > 0)), f"inertia must be > 0, got {self.inertia}"),
+            (bool(np.all(self.drag >= 0)), f"drag must be >= 0, got {self.drag}"),
+            (bool(np.all(self.body_size > 0)), f"body_size must be > 0, got {self.body_size}"),
+            (self.max_total_thrust > self.weight,
+             f"the rotors lift {self.max_total_thrust:.3g} N in all, not more than the "
+             f"weight {self.weight:.3g} N"),
+        ])
+
+    def replace(self, **changes: object) -> VehicleParams:
+        """A copy with some fields changed (see :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def weight(self) -> float:
+        """m g, N."""
+        return self.mass * self.gravity
+
+    @property
+    def max_rotor_thrust(self) -> float:
+        """Thrust of one rotor at full speed, N."""
+        return self.thrust_coefficient * self.rotor_speed_max ** 2
+
+    @property
+    def max_total_thrust(self) -> float:
+        """Thrust of all four rotors at full speed, N."""
+        return 4.0 * self.max_rotor_thrust
+
+    @property
+    def torque_per_thrust(self) -> float:
+        """``k_m / k_f``: yaw torque per newton of rotor thrust, m."""
+        return self.torque_coefficient / self.thrust_coefficient
+
+    @property
+    def hover_command(self) -> float:
+        """Motor command in [0, 1] that hovers: a quarter of the weight per rotor."""
+        return self.weight / self.max_total_thrust
+
+
+def preset_names() -> list[str]:
+    """Names of the shipped presets."""
+    return sorted(p.name.removesuffix(".toml") for p in _presets().iterdir()
+                  if p.name.endswith(".toml"))
+
+
+def _presets():
+    return resources.files("quadnav.vehicle") / "presets"
+
+
+def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
+    """A preset by name (see :func:`preset_names`) or a TOML file's parameters."""
+    if str(spec) in preset_names():
+        path = _presets() / f"{spec}.toml"
+        with resources.as_file(path) as real:
+            table = read_toml(real)
+        table.pop("based_on", None)
+        return from_table(VehicleParams(name=str(spec)), table, f"preset {spec}")
+    path = Path(spec)
+    if not path.is_file():
+        raise QuadnavError(f"{spec}: expected a vehicle preset ({', '.join(preset_names())}) "
+                           "or a TOML file")
+    table = read_toml(path)
+    base = table.pop("based_on", DEFAULT_PRESET)
+    if base not in preset_names():
+        raise QuadnavError(f"{path}: based_on must name a preset "
+                           f"({', '.join(preset_names())}), got {base!r}")
+    return from_table(load_params(base).replace(name=path.stem), table, str(path))

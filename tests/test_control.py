@@ -1,0 +1,126 @@
+"""The cascaded controller on the simulated vehicle: hover, steps, saturation, gain files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from quadnav.control.gains import Gains, Limits, gain_preset_names, load_gains
+from quadnav.errors import QuadnavError
+from quadnav.sim.flight import Ending
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
+from quadnav.trajectory.model import hold_trajectory
+from quadnav.vehicle.dynamics import hover_state
+from quadnav.vehicle.params import load_params
+
+TELLO = load_params("tello")
+RBE595 = load_params("rbe595")
+HOME = np.array([1.0, 2.0, 1.5])
+#: Every control step recorded.
+FULL_RECORD = SimSettings(record_rate=1000.0)
+
+
+def test_hover_holds_within_a_centimetre_with_sensor_noise_and_gusts():
+    settings = SimSettings(record_rate=1000.0, gust_std=0.005, position_noise=0.001,
+                           velocity_noise=0.005, attitude_noise=0.002, gyro_noise=0.005,
+                           seed=7)
+    flight = simulate(hold_trajectory(HOME, 20.0), TELLO, world=None, settings=settings)
+    deviation = np.linalg.norm(flight.position - HOME, axis=1)
+    print(f"hover with noise and gusts: max {100 * deviation.max():.2f} cm, "
+          f"RMS {100 * np.sqrt(np.mean(deviation ** 2)):.2f} cm")
+    assert flight.ending is Ending.COMPLETED
+    assert deviation.max() < 0.01
+
+
+@pytest.mark.parametrize("params", [TELLO, RBE595], ids=["tello", "rbe595"])
+def test_hover_without_disturbance_does_not_move(params):
+    flight = simulate(hold_trajectory(HOME, 5.0), params, load_gains(preset=params.gains),
+                      settings=FULL_RECORD)
+    assert flight.max_tracking_error < 1e-9
+
+
+def _step(params, axis: int, size: float, gains: Gains | None = None, seconds: float = 8.0):
+    start = hover_state(params, HOME - size * np.eye(3)[axis])
+    flight = simulate(hold_trajectory(HOME, seconds), params,
+                      gains or load_gains(preset=params.gains), settings=FULL_RECORD,
+                      initial_state=start)
+    x = flight.position[:, axis]
+    overshoot = (x.max() - HOME[axis]) / size
+    outside = np.flatnonzero(np.abs(x - HOME[axis]) > 0.02 * size)
+    settling = flight.t[outside[-1] + 1] if len(outside) else 0.0
+    return flight, overshoot, settling
+
+
+#: (vehicle, axis, step m, largest overshoot as a fraction, largest 2 % settling time s)
+STEPS = [(TELLO, 0, 1.0, 0.05, 2.0), (TELLO, 1, 1.0, 0.05, 2.0), (TELLO, 2, 0.5, 0.05, 1.5),
+         (RBE595, 0, 1.0, 0.05, 4.0), (RBE595, 2, 0.5, 0.05, 2.0)]
+
+
+@pytest.mark.parametrize(("params", "axis", "size", "max_overshoot", "max_settling"), STEPS,
+                         ids=["tello-x", "tello-y", "tello-z", "rbe595-x", "rbe595-z"])
+def test_a_step_settles_without_overshoot_beyond_five_percent(params, axis, size,
+                                                              max_overshoot, max_settling):
+    flight, overshoot, settling = _step(params, axis, size)
+    print(f"{params.name} step {size} m along {'xyz'[axis]}: overshoot {100 * overshoot:.2f} %, "
+          f"2 % settling {settling:.2f} s")
+    assert flight.ending is Ending.COMPLETED
+    assert overshoot < max_overshoot
+    assert settling < max_settling
+    assert flight.final_error < 0.005
+
+
+def test_a_long_step_under_the_speed_limit_does_not_wind_up():
+    gains = Gains(limits=Limits(speed_xy=1.5))
+    flight, overshoot, settling = _step(TELLO, 0, 8.0, gains, seconds=12.0)
+    speed = np.hypot(flight.velocity[:, 0], flight.velocity[:, 1])
+    print(f"8 m step at 1.5 m/s: top speed {speed.max():.3f} m/s, overshoot "
+          f"{100 * overshoot:.2f} %, settling {settling:.2f} s")
+    assert speed.max() < 1.5 * 1.05
+    assert overshoot < 0.01
+    assert settling < 8.0
+
+
+def test_a_steady_wind_is_integrated_away():
+    settings = SimSettings(record_rate=1000.0, wind=[0.03, -0.02, 0.0])  # ~4 % of the weight
+    flight = simulate(hold_trajectory(HOME, 15.0), TELLO, settings=settings)
+    assert flight.ending is Ending.COMPLETED
+    assert flight.final_error < 0.005
+    assert flight.max_tracking_error < 0.05
+
+
+def test_a_gains_file_sets_only_its_keys(tmp_path):
+    path = tmp_path / "gains.toml"
+    path.write_text("attitude_kp = [8.0, 8.0, 4.0]\n[velocity]\nki = [0.5, 0.5, 1.0]\n"
+                    "[limits]\ntilt_max_deg = 30.0\n")
+    gains = load_gains(path)
+    default = Gains()
+    assert np.array_equal(gains.attitude_kp, [8.0, 8.0, 4.0])
+    assert np.array_equal(gains.velocity.ki, [0.5, 0.5, 1.0])
+    assert np.array_equal(gains.velocity.kp, default.velocity.kp)
+    assert gains.limits.tilt_max_deg == 30.0
+    assert gains.limits.speed_xy == default.limits.speed_xy
+    assert gains.as_dict()["velocity"]["ki"] == [0.5, 0.5, 1.0]
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("[velocity]\nkq = [1, 1, 1]\n", r"\[velocity\]: unknown key 'kq'"),
+    ("[velocity]\nkp = [1, 1]\n", "kp: expected a list of 3 numbers"),
+    ("[position]\nki = [-1, 0, 0]\n", "ki must be >= 0"),
+    ("[limits]\ntilt_max_deg = 95\n", "tilt_max_deg must be in"),
+    ("velocity = 3\n", "velocity must be a table"),
+])
+def test_a_bad_gains_file_names_the_file_and_key(tmp_path, text, message):
+    path = tmp_path / "gains.toml"
+    path.write_text(text)
+    with pytest.raises(QuadnavError, match=message) as error:
+        load_gains(path)
+    assert str(path) in str(error.value)
+
+
+def test_vehicle_presets_name_their_gain_sets():
+    assert gain_preset_names() == ["rbe595", "tello"]
+    assert TELLO.gains == "tello" and RBE595.gains == "rbe595"
+    assert load_gains(preset="rbe595").rate.kp[0] < Gains().rate.kp[0]
+    with pytest.raises(QuadnavError, match="unknown gain set"):
+        load_gains(preset="nope")

@@ -1,0 +1,125 @@
+"""``quadnav fly``: outputs, exit codes, bad input, seeds."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+from clitools import assert_user_error, run
+
+REQUIRED_METRICS = ("success", "collision", "reached_goal", "final_error_m", "path_length_m",
+                    "trajectory_duration_s", "rms_tracking_error_m", "max_tracking_error_m",
+                    "min_clearance_m", "planning_time_s", "sim_wall_time_s")
+FLIGHT_COLUMNS = ["t", "x", "y", "z", "vx", "vy", "vz", "qw", "qx", "qy", "qz",
+                  "u1", "u2", "u3", "u4", "x_ref", "y_ref", "z_ref"]
+OUTPUTS = ("metrics.json", "path.csv", "trajectory.csv", "flight.csv", "flight_3d.png",
+           "flight_states.png", "tracking_error.png")
+SMALL = "forest:size=12x12x4,seed=2"
+
+
+def test_fly_on_the_default_world_writes_every_output(tmp_path):
+    result = run("fly", "-o", tmp_path / "out", "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert "success" in result.stdout
+    out = tmp_path / "out"
+    for name in OUTPUTS:
+        assert (out / name).stat().st_size > 0, name
+    metrics = json.loads((out / "metrics.json").read_text())
+    for key in REQUIRED_METRICS:
+        assert key in metrics, key
+    assert metrics["success"] and not metrics["collision"] and metrics["reached_goal"]
+    assert metrics["map"].startswith("forest")
+    assert metrics["vehicle"] == "tello" and metrics["speed_m_s"] == 2.0
+    with (out / "flight.csv").open() as file:
+        rows = list(csv.reader(file))
+    assert rows[0] == FLIGHT_COLUMNS
+    table = np.array(rows[1:], dtype=float)
+    assert table[-1, 0] == pytest.approx(metrics["flight_time_s"], abs=1e-6)
+    final = table[-1, 1:4]
+    assert np.linalg.norm(final - metrics["goal"]) == pytest.approx(metrics["final_error_m"],
+                                                                     abs=1e-6)
+    assert np.all((table[:, 11:15] >= 0) & (table[:, 11:15] <= 1))
+    path = np.loadtxt(out / "path.csv", delimiter=",", skiprows=1)
+    assert np.allclose(path[0], metrics["start"]) and np.allclose(path[-1], metrics["goal"])
+
+
+def test_the_same_seed_flies_the_same_flight(tmp_path):
+    for name in ("a", "b"):
+        assert run("fly", SMALL, "--seed", "5", "-o", tmp_path / name, "--quiet",
+                   "--no-figures").returncode == 0
+    assert (tmp_path / "a/flight.csv").read_text() == (tmp_path / "b/flight.csv").read_text()
+    assert run("fly", SMALL, "--seed", "6", "-o", tmp_path / "c", "--quiet",
+               "--no-figures").returncode == 0
+    assert not (tmp_path / "c/flight_3d.png").exists()
+    assert (tmp_path / "a/path.csv").read_text() != (tmp_path / "c/path.csv").read_text()
+
+
+def test_the_rbe595_vehicle_and_a_gains_file(tmp_path):
+    gains = tmp_path / "gains.toml"
+    gains.write_text("[position]\nkp = [0.6, 0.6, 2.0]\n")
+    result = run("fly", SMALL, "--params", "rbe595", "--gains", gains, "--speed", "1",
+                 "-o", tmp_path / "out", "--quiet", "--no-figures")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert json.loads((tmp_path / "out/metrics.json").read_text())["vehicle"] == "rbe595"
+
+
+def test_a_missed_goal_exits_1_and_still_reports(tmp_path):
+    gains = tmp_path / "sluggish.toml"
+    gains.write_text("[limits]\ntilt_max_deg = 1.0\n")  # cannot keep up with the trajectory
+    result = run("fly", SMALL, "--gains", gains, "--settle", "0", "-o", tmp_path / "out",
+                 "--quiet", "--no-figures")
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "quadnav: flight failed:" in result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert not metrics["success"]
+    assert (tmp_path / "out/flight.csv").exists()
+
+
+def test_no_path_exits_1_with_metrics_only(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "flight.csv").write_text("stale")
+    result = run("fly", SMALL, "--iterations", "1", "-o", out, "--quiet")
+    assert result.returncode == 1
+    assert "no path" in result.stderr
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["path_found"] is False and metrics["success"] is False
+    assert not (out / "flight.csv").exists()
+
+
+@pytest.mark.parametrize(("args", "fragments"), [
+    (["--params", "boeing"], ["boeing", "expected a vehicle preset"]),
+    (["--speed", "-2"], ["--speed", "expected a number > 0"]),
+    (["--physics-rate", "1500"], ["whole multiple of the control rate"]),
+    (["--start", "100", "0", "1"], ["start", "outside"]),
+    (["--goal", "6", "6", "-1"], ["goal", "outside"]),
+])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, args, fragments):
+    out = tmp_path / "out"
+    assert_user_error(run("fly", SMALL, *args, "-o", out), *fragments)
+    assert not out.exists()
+
+
+def test_a_bad_gains_file_is_named(tmp_path):
+    gains = tmp_path / "gains.toml"
+    gains.write_text("[rate]\nkp = [1, 2]\n")
+    out = tmp_path / "out"
+    assert_user_error(run("fly", SMALL, "--gains", gains, "-o", out), str(gains), "kp")
+    assert not out.exists()
+
+
+def test_an_unreachable_goal_is_a_user_error(tmp_path, shared_maps):
+    out = tmp_path / "out"
+    result = run("fly", shared_maps / "meam620/test_impossible.json", "-o", out)
+    assert_user_error(result, "disconnected")
+    assert not out.exists()
+
+
+def test_a_start_inside_a_block_is_a_user_error(tmp_path, shared_maps):
+    out = tmp_path / "out"
+    result = run("fly", shared_maps / "rbe595/map1.txt", "--start", "5", "2.25", "1",
+                 "--goal", "8", "18", "3", "-o", out)
+    assert_user_error(result, "start (5, 2.25, 1)", "inside block")
+    assert not out.exists()

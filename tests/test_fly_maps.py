@@ -1,0 +1,66 @@
+"""The main job end to end: every public course map with a path and every built-in world
+over 20 seeds are flown to the goal with no collision at 2 m/s cruise."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from publicmaps import MAPS, course_query
+
+from quadnav.errors import PlanningWarning
+from quadnav.mission import Mission, MissionSettings, fly_mission
+from quadnav.sim.settings import SimSettings
+from quadnav.world import load_world
+from quadnav.world.builtin import world_names
+
+SEEDS = range(20)
+
+
+def _fly(world, start, goal, margin, seed: int = 0) -> Mission:
+    settings = MissionSettings(planning=MissionSettings().planning.replace(seed=seed),
+                               sim=SimSettings(seed=seed))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlanningWarning)  # starts inside the margin
+        return fly_mission(world, start, goal, margin, settings)
+
+
+def _assert_clean_success(mission: Mission) -> None:
+    metrics = mission.metrics()
+    assert metrics["path_found"], metrics
+    assert not metrics["collision"], metrics
+    assert metrics["reached_goal"] and metrics["success"], metrics
+    assert metrics["final_error_m"] <= SimSettings().goal_tolerance
+    clearance = metrics["min_clearance_m"]
+    assert clearance is None or clearance > 0.0
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_every_course_map_is_flown_to_the_goal_without_collision(shared_maps, name):
+    mission = _fly(*course_query(shared_maps, name))
+    _assert_clean_success(mission)
+    t = np.linspace(0.0, mission.trajectory.duration, 4000)
+    top_speed = np.linalg.norm(mission.trajectory.velocity(t), axis=1).max()
+    print(f"{name}: top speed {top_speed:.2f} m/s, RMS tracking "
+          f"{100 * mission.flight.rms_tracking_error:.2f} cm")
+
+
+def test_map1_is_tracked_within_five_centimetres_rms_at_two_metres_per_second(shared_maps):
+    mission = _fly(*course_query(shared_maps, "rbe595/map1.txt"))
+    t = np.linspace(0.0, mission.trajectory.duration, 4000)
+    top_speed = np.linalg.norm(mission.trajectory.velocity(t), axis=1).max()
+    rms = mission.flight.rms_tracking_error
+    print(f"rbe595/map1.txt at {top_speed:.2f} m/s top speed: RMS tracking error "
+          f"{100 * rms:.2f} cm, max {100 * mission.flight.max_tracking_error:.2f} cm")
+    _assert_clean_success(mission)
+    assert top_speed == pytest.approx(2.0, rel=0.01)
+    assert rms < 0.05
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("name", world_names())
+def test_every_built_in_world_is_flown_to_the_goal_over_twenty_seeds(name, seed):
+    spec = name if name == "empty" else f"{name}:seed={seed}"  # the empty world has no seed
+    world = load_world(spec)
+    _assert_clean_success(_fly(world, world.start, world.goal, world.margin, seed))

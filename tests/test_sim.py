@@ -1,0 +1,136 @@
+"""Closed-loop simulation: contact with blocks, the boundary, divergence, records, seeds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from quadnav.sim.collision import boxes_touch
+from quadnav.sim.flight import Ending
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
+from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
+from quadnav.trajectory.model import hold_trajectory
+from quadnav.vehicle import quaternion
+from quadnav.vehicle.dynamics import hover_state
+from quadnav.vehicle.params import load_params
+from quadnav.world import World
+
+TELLO = load_params("tello")
+HALF = 0.5 * TELLO.body_size
+BLOCK = np.array([2.0, -1.0, 0.0, 3.0, 1.0, 3.0])
+WORLD = World(np.array([-1.0, -3.0, 0.0, 6.0, 3.0, 4.0]), BLOCK[None])
+
+
+def _yawed(angle: float) -> np.ndarray:
+    return quaternion.to_matrix(quaternion.from_yaw(angle))
+
+
+@pytest.mark.parametrize(("angle", "reach"), [
+    (0.0, HALF[0]), (math.pi / 4, (HALF[0] + HALF[1]) / math.sqrt(2)),
+    (math.pi / 2, HALF[1]), (math.pi / 6, HALF[0] * math.cos(math.pi / 6)
+                             + HALF[1] * math.sin(math.pi / 6))])
+def test_the_body_box_touches_a_block_exactly_at_its_reach(angle, reach):
+    rotation = _yawed(angle)
+    touching = np.array([BLOCK[0] - reach, 0.0, 1.0])
+    assert boxes_touch(touching, rotation, HALF, BLOCK)
+    assert not boxes_touch(touching - [1e-9, 0, 0], rotation, HALF, BLOCK)
+
+
+def test_a_tilted_body_reaches_further_down():
+    pitch = math.radians(30)
+    rotation = np.array([[math.cos(pitch), 0, math.sin(pitch)], [0, 1, 0],
+                         [-math.sin(pitch), 0, math.cos(pitch)]])
+    reach = HALF[0] * math.sin(pitch) + HALF[2] * math.cos(pitch)
+    floor_block = np.array([-5.0, -5.0, -1.0, 5.0, 5.0, 0.0])
+    assert boxes_touch(np.array([0.0, 0.0, reach]), rotation, HALF, floor_block)
+    assert not boxes_touch(np.array([0.0, 0.0, reach + 1e-9]), rotation, HALF, floor_block)
+    # an edge-on approach: only the 9 edge-edge axes separate these two
+    edge = _yawed(math.pi / 4) @ rotation
+    corner = np.array([-1.0, -1.0, -1.0, 0.0, 0.0, 0.0])
+    assert not boxes_touch(np.array([0.06, 0.06, 0.06]), edge, HALF, corner)
+
+
+def _straight(a, b, speed=1.0):
+    return make_trajectory(np.array([a, b], dtype=float), TrajectorySettings(v_max=speed))
+
+
+def test_flying_into_a_block_stops_at_the_contact():
+    trajectory = _straight([0.0, 0.0, 1.0], [5.0, 0.0, 1.0])
+    flight = simulate(trajectory, TELLO, world=WORLD, settings=SimSettings(record_rate=1000.0))
+    assert flight.ending is Ending.COLLISION
+    assert flight.contact_block == 0
+    front = flight.position[-1, 0] + HALF[0]
+    assert front == pytest.approx(BLOCK[0], abs=0.01)  # body level-ish at contact
+    times = np.linspace(0, trajectory.duration, 20001)
+    expected = times[np.argmax(trajectory.position(times)[:, 0] + HALF[0] >= BLOCK[0])]
+    assert flight.contact_time == pytest.approx(expected, abs=0.1)
+
+
+def test_leaving_the_boundary_and_turning_over_stop_the_flight():
+    out = _straight([5.0, 0.0, 1.0], [8.0, 0.0, 1.0])
+    flight = simulate(out, TELLO, world=WORLD)
+    assert flight.ending is Ending.LEFT_BOUNDARY
+    assert flight.position[-1, 0] > WORLD.boundary[3] + SimSettings().boundary_tolerance
+    upside_down = hover_state(TELLO, [4.0, 0.0, 2.0])
+    upside_down[6:10] = [0.0, 1.0, 0.0, 0.0]
+    flight = simulate(hold_trajectory([4.0, 0.0, 2.0], 2.0), TELLO, world=WORLD,
+                      initial_state=upside_down)
+    assert flight.ending is Ending.DIVERGED
+    assert flight.contact_time is not None and flight.contact_block is None
+
+
+def test_a_takeoff_from_the_floor_is_no_collision():
+    trajectory = _straight([4.0, 0.0, 0.0], [4.0, 2.0, 1.5])
+    flight = simulate(trajectory, TELLO, world=WORLD)
+    assert flight.ending is Ending.COMPLETED
+    assert flight.position[:, 2].min() >= 0.0
+    assert flight.final_error < 0.01
+
+
+def test_tracking_statistics_cover_every_control_step():
+    trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
+    flight = simulate(trajectory, TELLO, world=WORLD, settings=SimSettings(record_rate=1000.0))
+    errors = flight.tracking_error[:-1]  # the last row is the final state
+    assert flight.rms_tracking_error == pytest.approx(np.sqrt(np.mean(errors ** 2)), rel=1e-12)
+    assert flight.max_tracking_error == pytest.approx(errors.max(), rel=1e-12)
+    assert np.allclose(np.diff(flight.t[:-1]), 1e-3)
+    coarse = simulate(trajectory, TELLO, world=WORLD, settings=SimSettings(record_rate=50.0))
+    assert np.allclose(np.diff(coarse.t[:-1]), 0.02)
+    assert coarse.rms_tracking_error == flight.rms_tracking_error
+    assert np.array_equal(coarse.states[-1], flight.states[-1])
+
+
+def test_the_same_seed_flies_the_same_flight_and_another_does_not():
+    trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0])
+    noisy = SimSettings(gust_std=0.01, position_noise=0.002, velocity_noise=0.01,
+                        attitude_noise=0.005, gyro_noise=0.01, seed=3)
+    a = simulate(trajectory, TELLO, world=WORLD, settings=noisy)
+    b = simulate(trajectory, TELLO, world=WORLD, settings=noisy)
+    c = simulate(trajectory, TELLO, world=WORLD, settings=noisy.replace(seed=4))
+    assert np.array_equal(a.states, b.states)
+    assert not np.array_equal(a.states, c.states)
+    assert a.ending is Ending.COMPLETED and c.ending is Ending.COMPLETED
+
+
+def test_slower_control_than_physics_still_tracks():
+    trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
+    settings = SimSettings(physics_rate=2000.0, control_rate=250.0)
+    flight = simulate(trajectory, TELLO, world=WORLD, settings=settings)
+    assert flight.ending is Ending.COMPLETED
+    assert flight.rms_tracking_error < 0.05
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"physics_rate": 1500.0}, "whole multiple"),
+    ({"record_rate": 2000.0}, "must not exceed the control rate"),
+    ({"goal_tolerance": 0.0}, "goal tolerance"),
+    ({"gust_std": -1.0}, "gust_std must be >= 0"),
+])
+def test_bad_settings_are_user_errors(changes, message):
+    from quadnav.errors import QuadnavError
+
+    with pytest.raises(QuadnavError, match=message):
+        SimSettings(**changes)
