@@ -123,3 +123,31 @@ def test_a_start_inside_a_block_is_a_user_error(tmp_path, shared_maps):
                  "--goal", "8", "18", "3", "-o", out)
     assert_user_error(result, "start (5, 2.25, 1)", "inside block")
     assert not out.exists()
+
+
+def test_a_run_folder_reads_back(tmp_path):
+    from quadnav.report.rundir import read_run
+
+    out = tmp_path / "out"
+    assert run("fly", SMALL, "-o", out, "--quiet", "--no-figures").returncode == 0
+    record = read_run(out)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert record.metrics == metrics
+    assert record.parameters["vehicle"]["name"] == "tello"
+    assert record.parameters["simulation"]["control_rate"] == 1000.0
+    assert np.allclose(record.world.start, metrics["start"])
+    assert np.allclose(record.world.goal, metrics["goal"])
+    assert record.world.margin == metrics["margin_m"]
+    assert len(record.world.blocks) > 0
+    assert record.tree_parents[0] == -1 and len(record.tree_edges()) == len(record.tree_nodes) - 1
+    assert np.allclose(record.path[[0, -1]], [metrics["start"], metrics["goal"]])
+    assert record.flight.t[-1] == pytest.approx(metrics["flight_time_s"], abs=1e-6)
+    assert record.trajectory.t[-1] == pytest.approx(metrics["trajectory_duration_s"], abs=1e-6)
+
+
+def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):
+    from quadnav.errors import QuadnavError
+    from quadnav.report.rundir import read_run
+
+    with pytest.raises(QuadnavError, match="not a quadnav fly output folder"):
+        read_run(tmp_path)

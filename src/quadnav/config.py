@@ -100,6 +100,20 @@ def from_table(base: C, table: dict[str, Any], where: str) -> C:
         raise QuadnavError(f"{where}: {error}") from None
 
 
+def as_plain(value: Any) -> Any:
+    """A config dataclass (or any nesting of dataclasses, arrays, enums and numbers) as
+    JSON-ready dicts, lists and scalars."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: as_plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if hasattr(value, "value") and type(value).__module__ != "builtins":  # an Enum
+        return value.value
+    return value
+
+
 def require(checks: list[tuple[bool, str]]) -> None:
     """Raise QuadnavError with the message of the first failed ``(ok, message)`` check."""
     for ok, message in checks:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
@@ -96,6 +97,21 @@ class Mission:
         """Goal reached within tolerance with no collision."""
         return self.flight is not None and flight_succeeded(self.flight,
                                                              self.settings.sim.goal_tolerance)
+
+    def parameters(self) -> dict:
+        """Every setting the mission ran with, JSON-ready: the query, planner, trajectory,
+        vehicle, gains and simulation settings."""
+        problem = self.problem
+        return {
+            "map": problem.world.name, "start": problem.start.tolist(),
+            "goal": problem.goal.tolist(), "margin_m": problem.margin,
+            "planner": self.settings.planner, "refine": self.settings.refine,
+            "planning": as_plain(self.settings.planning),
+            "trajectory": as_plain(self.settings.trajectory),
+            "vehicle": as_plain(self.settings.vehicle),
+            "gains": as_plain(self.settings.gains),
+            "simulation": as_plain(self.settings.sim),
+        }
 
     def metrics(self) -> dict:
         """JSON-ready summary (see the README's list of ``metrics.json`` keys)."""

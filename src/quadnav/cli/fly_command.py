@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import sys
 
 from quadnav.cli.args import (
@@ -19,7 +17,6 @@ from quadnav.cli.args import (
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.gains import load_gains
-from quadnav.files import atomic_output
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
     DEFAULT_ITERATIONS,
@@ -30,19 +27,14 @@ from quadnav.mission import (
     fly_problem,
 )
 from quadnav.planning import PlannerSettings, get_planner, make_problem
-from quadnav.planning.report import path_csv
-from quadnav.sim.export import flight_csv
+from quadnav.report.rundir import FIGURES, write_run
 from quadnav.sim.settings import SimSettings
-from quadnav.trajectory.export import trajectory_csv
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
 from quadnav.world import load_world
 
 #: Exit code of a flight that collided, missed the goal or found no path.
 EXIT_FAILED = 1
-#: Sample interval of trajectory.csv, s.
-TRAJECTORY_DT = 0.01
-FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
 
 
 def mission_settings(args: argparse.Namespace) -> MissionSettings:
@@ -71,55 +63,13 @@ def fly(args: argparse.Namespace) -> int:
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
-    folder.mkdir(parents=True, exist_ok=True)
-    written = _write_outputs(mission, folder, figures=not args.no_figures)
+    written = write_run(mission, folder, figures=not args.no_figures)
     _print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not mission.success:
         print(f"quadnav: flight failed: {_failure(mission)}", file=sys.stderr)
         return EXIT_FAILED
     return 0
-
-
-def _write_outputs(mission: Mission, folder, figures: bool) -> list[str]:
-    """Write every output file of the mission (the figures if ``figures``); stale files
-    of an earlier run go."""
-    texts = {"metrics.json": json.dumps(_json_ready(mission.metrics()), indent=2) + "\n"}
-    if mission.flight is not None:
-        texts["path.csv"] = path_csv(mission.plan.path)
-        texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
-        texts["flight.csv"] = flight_csv(mission.flight)
-    for name in ("path.csv", "trajectory.csv", "flight.csv", *FIGURES):
-        if name not in texts:
-            (folder / name).unlink(missing_ok=True)
-    for name, text in texts.items():
-        with atomic_output(folder / name) as tmp:
-            tmp.write_text(text)
-    if mission.flight is None or not figures:
-        return list(texts)
-    from quadnav.viz.figures import save_figure
-    from quadnav.viz.flight_figures import (
-        flight_3d_figure,
-        flight_states_figure,
-        tracking_error_figure,
-    )
-
-    for name, figure in zip(FIGURES, (flight_3d_figure(mission),
-                                      flight_states_figure(mission.flight),
-                                      tracking_error_figure(mission.flight)), strict=True):
-        save_figure(figure, folder / name)
-    return [*texts, *FIGURES]
-
-
-def _json_ready(value):
-    """JSON has no infinity or NaN: such numbers become null."""
-    if isinstance(value, dict):
-        return {key: _json_ready(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [_json_ready(item) for item in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def _failure(mission: Mission) -> str:
@@ -162,8 +112,9 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
         description="The whole pipeline: plan a path with RRT* through MAP, shortcut and "
                     "smooth it, make a minimum-snap trajectory at the cruise speed, and fly "
                     "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
-                    "DIR/metrics.json, DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and "
-                    f"the figures {', '.join(FIGURES)}. Exit 0 when the vehicle reaches the "
+                    "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
+                    "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
+                    f"{', '.join(FIGURES)}. Exit 0 when the vehicle reaches the "
                     "goal without touching a block; 1 on a collision, a missed goal or no "
                     "path (metrics.json is still written); 2 on bad input.")
     add_map_argument(p, optional=True)

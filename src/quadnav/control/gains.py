@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from quadnav.config import from_table, frozen_vector, read_toml, require, vector_field
+from quadnav.config import as_plain, from_table, frozen_vector, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
 from quadnav.vehicle.params import FloatArray
 
@@ -127,11 +127,7 @@ class Gains:
 
     def as_dict(self) -> dict:
         """JSON-ready nested dict, the layout of a gains TOML file."""
-        def plain(value):
-            if dataclasses.is_dataclass(value):
-                return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
-            return value.tolist() if isinstance(value, np.ndarray) else value
-        return plain(self)
+        return as_plain(self)
 
 
 def gain_preset_names() -> list[str]:

@@ -1,0 +1,207 @@
+"""A run folder: what ``quadnav fly`` writes, and :func:`read_run` to read it back.
+
+Files (every number SI, world frame z up):
+
+================== ============================================================
+``metrics.json``   outcome and figures of merit (:meth:`Mission.metrics`)
+``parameters.json`` every setting used (:meth:`Mission.parameters`)
+``map.json``       the map, with the start, goal and margin flown (JSON map format)
+``tree.csv``       the explored tree: ``x,y,z,parent`` per vertex (parent -1: a root)
+``path.csv``       the refined path, ``x,y,z`` per vertex (only with a path)
+``trajectory.csv`` the reference every 10 ms (only with a path)
+``flight.csv``     the flight record (only with a path)
+``*.png``          figures (unless skipped)
+================== ============================================================
+
+The viewer, the animation, the Blender scene and the report all start from
+:func:`read_run`, so they work on any folder a run left, long after the run.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from quadnav.errors import QuadnavError
+from quadnav.files import atomic_output
+from quadnav.mission import Mission
+from quadnav.planning.report import path_csv
+from quadnav.sim.export import FLIGHT_HEADER, flight_csv
+from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
+from quadnav.vehicle.params import FloatArray
+from quadnav.world import World, read_map
+from quadnav.world.mapfile import format_map
+
+#: Sample interval of trajectory.csv, s.
+TRAJECTORY_DT = 0.01
+#: Figures a run writes, in the order the report shows them.
+FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
+#: Files written only when there is a path.
+FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
+TREE_HEADER = "x,y,z,parent"
+
+
+def write_run(mission: Mission, folder: Path, figures: bool = True) -> list[str]:
+    """Write the run folder of ``mission`` (created if needed); returns the names written.
+
+    Files of an earlier run that this one does not write are removed, so the folder never
+    mixes two runs."""
+    problem = mission.problem
+    world = problem.world.replace(start=problem.start, goal=problem.goal,
+                                  margin=problem.margin)
+    plan = mission.plan
+    texts = {
+        "metrics.json": _json(mission.metrics()),
+        "parameters.json": _json(mission.parameters()),
+        "map.json": format_map(world, "map.json"),
+        "tree.csv": csv_table(np.column_stack([plan.tree_nodes, plan.tree_parents]),
+                              TREE_HEADER),
+    }
+    if mission.flight is not None:
+        texts["path.csv"] = path_csv(plan.path)
+        texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
+        texts["flight.csv"] = flight_csv(mission.flight)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in (*FLIGHT_FILES, *FIGURES):
+        if name not in texts:
+            (folder / name).unlink(missing_ok=True)
+    for name, text in texts.items():
+        with atomic_output(folder / name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+    if mission.flight is None or not figures:
+        return list(texts)
+    from quadnav.viz.figures import save_figure
+    from quadnav.viz.flight_figures import (
+        flight_3d_figure,
+        flight_states_figure,
+        tracking_error_figure,
+    )
+
+    for name, figure in zip(FIGURES, (flight_3d_figure(mission),
+                                      flight_states_figure(mission.flight),
+                                      tracking_error_figure(mission.flight)), strict=True):
+        save_figure(figure, folder / name)
+    return [*texts, *FIGURES]
+
+
+def _json(value) -> str:
+    return json.dumps(_finite(value), indent=2) + "\n"
+
+
+def _finite(value):
+    """JSON has no infinity or NaN: such numbers become null."""
+    if isinstance(value, dict):
+        return {key: _finite(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(item) for item in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+@dataclass(frozen=True, eq=False)
+class FlightTable:
+    """flight.csv as arrays: t (N,) s, position, velocity (N, 3), attitude (N, 4)
+    quaternions (w, x, y, z), commands (N, 4) in [0, 1], reference (N, 3) m."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    attitude: FloatArray
+    commands: FloatArray
+    reference: FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class TrajectoryTable:
+    """trajectory.csv as arrays: t (N,) s, position, velocity, acceleration (N, 3),
+    yaw (N,) rad."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    acceleration: FloatArray
+    yaw: FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """A run folder read back.
+
+    Attributes:
+        folder: where it was read from.
+        world: the map with the start, goal and margin flown.
+        metrics: metrics.json.
+        parameters: parameters.json.
+        tree_nodes: (N, 3) explored tree vertices, m.
+        tree_parents: (N,) parent row of each vertex, -1 for a root.
+        path: (M, 3) refined path, or None without a path.
+        trajectory: the reference, or None.
+        flight: the flight record, or None.
+    """
+
+    folder: Path
+    world: World
+    metrics: dict
+    parameters: dict
+    tree_nodes: FloatArray
+    tree_parents: np.ndarray
+    path: FloatArray | None
+    trajectory: TrajectoryTable | None
+    flight: FlightTable | None
+
+    def tree_edges(self) -> FloatArray:
+        """(E, 2, 3) segments from each non-root vertex to its parent."""
+        child = np.flatnonzero(self.tree_parents >= 0)
+        return np.stack([self.tree_nodes[child], self.tree_nodes[self.tree_parents[child]]],
+                        axis=1).reshape(-1, 2, 3)
+
+
+def _table(path: Path, header: str) -> np.ndarray:
+    """The numbers of a CSV file whose first line must be ``header``."""
+    try:
+        with path.open(encoding="utf-8") as file:
+            first = file.readline().strip()
+            if first != header:
+                raise QuadnavError(f"{path}:1: expected the header {header!r}, got {first!r}")
+            rows = np.loadtxt(file, delimiter=",", ndmin=2)
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
+    except ValueError as error:
+        raise QuadnavError(f"{path}: expected rows of numbers: {error}") from None
+    width = header.count(",") + 1
+    if rows.size and rows.shape[1] != width:
+        raise QuadnavError(f"{path}: expected {width} columns, got {rows.shape[1]}")
+    return rows.reshape(-1, width)
+
+
+def _json_file(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
+    except json.JSONDecodeError as error:
+        raise QuadnavError(f"{path}:{error.lineno}: not valid JSON: {error.msg}") from None
+
+
+def read_run(folder: str | Path) -> Run:
+    """The run folder at ``folder``; QuadnavError naming the file if one is missing or bad."""
+    folder = Path(folder)
+    if not (folder / "metrics.json").is_file():
+        raise QuadnavError(f"{folder}: not a quadnav fly output folder (no metrics.json); "
+                           "run quadnav fly -o DIR first")
+    tree = _table(folder / "tree.csv", TREE_HEADER)
+    path = trajectory = flight = None
+    if (folder / "flight.csv").is_file():
+        path = _table(folder / "path.csv", "x,y,z")
+        t = _table(folder / "trajectory.csv", CSV_HEADER)
+        trajectory = TrajectoryTable(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
+        f = _table(folder / "flight.csv", FLIGHT_HEADER)
+        flight = FlightTable(f[:, 0], f[:, 1:4], f[:, 4:7], f[:, 7:11], f[:, 11:15],
+                             f[:, 15:18])
+    return Run(folder, read_map(folder / "map.json"), _json_file(folder / "metrics.json"),
+               _json_file(folder / "parameters.json"), tree[:, 0:3],
+               tree[:, 3].astype(np.int64), path, trajectory, flight)
