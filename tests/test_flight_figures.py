@@ -1,4 +1,5 @@
-"""Flight figures drawn from real missions: what each one shows, and that it saves."""
+"""Flight figures drawn from real run folders read back: what each one shows, that it
+agrees with the mission that wrote the folder, and what write_run saves."""
 
 from __future__ import annotations
 
@@ -10,12 +11,14 @@ import pytest
 
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
+from quadnav.report.rundir import FIGURES, REPORT, Run, read_run, write_run
 from quadnav.sim.flight import Ending
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import make_trajectory
-from quadnav.viz.figures import save_figure
 from quadnav.viz.flight_figures import (
     MIN_SPAN,
+    desired_velocity,
+    figure_makers,
     flight_3d_figure,
     flight_states_figure,
     tracking_error_figure,
@@ -23,18 +26,30 @@ from quadnav.viz.flight_figures import (
 from quadnav.world import load_world
 
 SETTINGS = MissionSettings(planning=PlannerSettings(seed=0, max_iterations=3000, time_limit=30))
+WORLD = "forest:size=12x12x4,seed=1"
 
 
 @pytest.fixture(scope="module")
 def mission() -> Mission:
-    world = load_world("forest:size=12x12x4,seed=1")
-    flown = fly_mission(world, settings=SETTINGS)
+    flown = fly_mission(load_world(WORLD), settings=SETTINGS)
     assert flown.success
     return flown
 
 
+def folder_of(mission: Mission, tmp_path_factory, name: str) -> Run:
+    """``mission`` written to a fresh folder (text files only) and read back."""
+    folder = tmp_path_factory.mktemp(name)
+    write_run(mission, folder, figures=False)
+    return read_run(folder)
+
+
 @pytest.fixture(scope="module")
-def crashed(mission) -> Mission:
+def run(mission, tmp_path_factory) -> Run:
+    return folder_of(mission, tmp_path_factory, "run")
+
+
+@pytest.fixture(scope="module")
+def crashed_mission(mission) -> Mission:
     """The mission with its flight replaced by a straight one along x through block 0."""
     world = mission.problem.world
     block = world.blocks[0]
@@ -43,6 +58,20 @@ def crashed(mission) -> Mission:
     flight = simulate(trajectory, world=world)
     assert flight.ending is Ending.COLLISION and flight.contact_block == 0
     return dataclasses.replace(mission, trajectory=trajectory, flight=flight)
+
+
+@pytest.fixture(scope="module")
+def crashed(crashed_mission, tmp_path_factory) -> Run:
+    return folder_of(crashed_mission, tmp_path_factory, "crashed")
+
+
+@pytest.fixture(scope="module")
+def pathless(tmp_path_factory) -> Run:
+    """A run whose search stopped after one sample, without a path."""
+    settings = MissionSettings(planning=PlannerSettings(seed=0, max_iterations=1))
+    mission = fly_mission(load_world(WORLD), settings=settings)
+    assert mission.flight is None
+    return folder_of(mission, tmp_path_factory, "pathless")
 
 
 def png_size(path) -> tuple[int, int]:
@@ -63,19 +92,26 @@ def line(ax, prefix: str):
     return found
 
 
-def test_three_figures_save_as_pngs_of_their_size(mission, tmp_path):
-    for name, fig in (("flight", flight_3d_figure(mission)),
-                      ("states", flight_states_figure(mission.flight)),
-                      ("error", tracking_error_figure(mission.flight))):
+def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(mission, run,
+                                                                           tmp_path):
+    written = write_run(mission, tmp_path)
+    assert written[-len(FIGURES):] == list(FIGURES)
+    assert [name for name in written if not name.endswith(".png")] == [
+        "metrics.json", "parameters.json", "map.json", "tree.csv", "path.csv",
+        "trajectory.csv", "flight.csv"]
+    for name, make in figure_makers(run).items():
+        fig = make(run)
         expected = tuple(round(v) for v in fig.get_size_inches() * fig.dpi)
         assert fig.dpi == 120
-        save_figure(fig, tmp_path / f"{name}.png")
-        assert png_size(tmp_path / f"{name}.png") == expected
+        assert png_size(tmp_path / name) == expected
+    (tmp_path / REPORT).write_text("an earlier run's report")
+    assert write_run(mission, tmp_path, figures=False) == written[:-len(FIGURES)]
+    assert not any((tmp_path / name).exists() for name in (*FIGURES, REPORT))
 
 
-def test_3d_figure_shows_both_views_with_path_trajectory_and_flight(mission):
-    fig = flight_3d_figure(mission)
-    flight = mission.flight
+def test_3d_figure_shows_both_views_with_path_trajectory_and_flight(run):
+    fig = flight_3d_figure(run)
+    flight = run.flight
     assert len(fig.axes) == 2 and all(ax.name == "3d" for ax in fig.axes)
     assert [(ax.elev, ax.azim) for ax in fig.axes] == [(30, -60), (90, -90)]
     texts = legend_texts(fig.axes[0])
@@ -83,40 +119,57 @@ def test_3d_figure_shows_both_views_with_path_trajectory_and_flight(mission):
         assert sum(t.startswith(prefix) for t in texts) == 1, (prefix, texts)
     assert fig.axes[1].get_legend() is None
     assert not any(t.startswith("collision") for t in texts)
-    samples = mission.trajectory.sample(0.02).position
+    extent = run.world.extent
     for ax in fig.axes:
         assert np.array_equal(np.array(line(ax, "flown").get_data_3d()).T, flight.position)
-        assert np.array_equal(np.array(line(ax, "trajectory").get_data_3d()).T, samples)
-        assert np.array_equal(np.array(line(ax, "path").get_data_3d()).T, mission.plan.path)
+        assert np.array_equal(np.array(line(ax, "trajectory").get_data_3d()).T,
+                              run.trajectory.position)
+        assert np.array_equal(np.array(line(ax, "path").get_data_3d()).T, run.path)
         assert line(ax, "path").get_color() == "red"
         assert len(ax.collections) > 3  # blocks, boundary, spheres and the tree
+        aspect = ax.get_box_aspect()  # a metre is as long along every axis
+        assert np.allclose(aspect / aspect[0], extent / extent[0])
+        assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
+    assert fig.axes[0].get_zlabel() == "z (m)"
     title = fig._suptitle.get_text()
-    assert mission.problem.world.name in title and "success" in title
-    assert f"RMS tracking error {100 * flight.rms_tracking_error:.2f} cm" in title
+    assert run.metrics["map"] in title and "success" in title
+    assert f"RMS tracking error {100 * run.metrics['rms_tracking_error_m']:.2f} cm" in title
     assert "2 m/s" in title
 
 
-def test_collision_is_marked_where_the_flight_stopped(crashed, tmp_path):
+def test_collision_is_marked_where_the_flight_stopped(crashed, crashed_mission):
     fig = flight_3d_figure(crashed)
-    flight = crashed.flight
+    flight = crashed_mission.flight
     assert any(t.startswith("collision (block 0") for t in legend_texts(fig.axes[0]))
     for ax in fig.axes:
         marker = line(ax, "collision")
         assert marker.get_marker() == "X"
-        assert np.array_equal(np.array(marker.get_data_3d()).T, flight.position[-1:])
+        assert np.allclose(np.array(marker.get_data_3d()).T, flight.position[-1:], atol=1e-6)
     assert f"collision at {flight.contact_time:.2f} s" in fig._suptitle.get_text()
-    save_figure(fig, tmp_path / "crash.png")
-    png_size(tmp_path / "crash.png")
 
 
-@pytest.mark.parametrize("which", ["mission", "crashed"])
+def test_a_run_without_a_path_shows_the_map_and_the_tree(pathless):
+    assert list(figure_makers(pathless)) == [FIGURES[0]]
+    fig = flight_3d_figure(pathless)
+    texts = legend_texts(fig.axes[0])
+    assert any(t.startswith("tree (") for t in texts)
+    assert not any(t.startswith(("path", "trajectory", "flown")) for t in texts)
+    assert fig._suptitle.get_text().endswith("\nno path")
+
+
+@pytest.mark.parametrize("which", ["run", "crashed"])
 def test_states_figure_plots_desired_and_actual_per_axis(which, request):
-    flight = request.getfixturevalue(which).flight
-    fig = flight_states_figure(flight)
+    run = request.getfixturevalue(which)
+    original = request.getfixturevalue("mission" if which == "run" else "crashed_mission")
+    flight = run.flight
+    fig = flight_states_figure(run)
     assert len(fig.axes) == 6
     axes = np.array(fig.axes).reshape(3, 2)
-    columns = ((flight.reference[:, 0:3], flight.position, "m)"),
-               (flight.reference[:, 3:6], flight.velocity, "m/s)"))
+    wanted_velocity = desired_velocity(run)
+    # The velocity read back from trajectory.csv is the one the controller was given.
+    assert np.allclose(wanted_velocity, original.flight.reference[:, 3:6], atol=1e-6)
+    columns = ((flight.reference, flight.position, "m)"),
+               (wanted_velocity, flight.velocity, "m/s)"))
     for column, (desired, actual, unit) in enumerate(columns):
         for axis in range(3):
             ax = axes[axis, column]
@@ -131,21 +184,26 @@ def test_states_figure_plots_desired_and_actual_per_axis(which, request):
             assert high - low >= MIN_SPAN - 1e-12 and low <= actual[:, axis].min()
             assert high >= actual[:, axis].max()
     assert axes[-1, 0].get_xlabel() == axes[-1, 1].get_xlabel() == "time (s)"
+    assert axes[0, 0].get_legend() is not None
 
 
-@pytest.mark.parametrize("which", ["mission", "crashed"])
+@pytest.mark.parametrize("which", ["run", "crashed"])
 def test_error_figure_shows_error_rms_and_max(which, request):
-    flight = request.getfixturevalue(which).flight
-    fig = tracking_error_figure(flight)
+    run = request.getfixturevalue(which)
+    original = request.getfixturevalue("mission" if which == "run" else "crashed_mission")
+    flight, metrics = run.flight, run.metrics
+    fig = tracking_error_figure(run)
     (ax,) = fig.axes
     error = line(ax, "tracking error")
     assert np.array_equal(error.get_xdata(), flight.t)
-    assert np.allclose(error.get_ydata(), 100 * flight.tracking_error, rtol=1e-12, atol=0)
-    rms = line(ax, "RMS")
-    assert np.allclose(rms.get_ydata(), 100 * flight.rms_tracking_error)
-    peak = int(np.argmax(flight.tracking_error))
+    # From the files, the same error as the flight in memory had (to the CSV's digits).
+    assert np.allclose(error.get_ydata(), 100 * original.flight.tracking_error, atol=1e-5)
+    assert np.allclose(line(ax, "RMS").get_ydata(), 100 * metrics["rms_tracking_error_m"])
+    recorded = 100 * np.linalg.norm(flight.position - flight.reference, axis=1)
+    peak = int(np.argmax(recorded))
     (note,) = ax.texts
-    assert note.get_text() == (f"max {100 * flight.tracking_error[peak]:.2f} cm at "
-                               f"{flight.t[peak]:.2f} s")
-    assert note.xy == (flight.t[peak], 100 * flight.tracking_error[peak])
-    assert ax.get_ylabel() == "position error (cm)"
+    assert note.get_text() == f"max {recorded[peak]:.2f} cm at {flight.t[peak]:.2f} s"
+    assert note.xy == (flight.t[peak], recorded[peak])
+    assert f"max {100 * metrics['max_tracking_error_m']:.2f} cm" in ax.get_title()
+    assert ax.get_ylabel() == "position error (cm)" and ax.get_xlabel() == "time (s)"
+    assert ax.get_legend() is not None

@@ -27,7 +27,7 @@ from quadnav.mission import (
     fly_problem,
 )
 from quadnav.planning import PlannerSettings, get_planner, make_problem
-from quadnav.report.rundir import FIGURES, write_run
+from quadnav.report.rundir import FIGURES, REPORT, read_run, write_run
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
@@ -64,6 +64,16 @@ def fly(args: argparse.Namespace) -> int:
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
     written = write_run(mission, folder, figures=not args.no_figures)
+    if not args.no_figures:
+        from quadnav.report.html_report import write_report
+
+        write_report([read_run(folder)], folder / REPORT)
+        written.append(REPORT)
+    if args.html:
+        from quadnav.viz.html_viewer import VIEW_PAGE, write_viewer
+
+        write_viewer(read_run(folder), folder / VIEW_PAGE)
+        written.append(VIEW_PAGE)
     _print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not mission.success:
@@ -114,9 +124,9 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
-                    f"{', '.join(FIGURES)}. Exit 0 when the vehicle reaches the "
-                    "goal without touching a block; 1 on a collision, a missed goal or no "
-                    "path (metrics.json is still written); 2 on bad input.")
+                    f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
+                    "reaches the goal without touching a block; 1 on a collision, a missed "
+                    "goal or no path (metrics.json is still written); 2 on bad input.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
@@ -140,7 +150,11 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--settle", type=float, default=SimSettings.settle_time, metavar="S",
                    help="seconds flown after the trajectory ends (default: 2)")
     p.add_argument("--no-figures", action="store_true",
-                   help="skip the figures (faster, e.g. for batches of runs)")
+                   help=f"skip the figures and {REPORT} (faster, e.g. for batches of "
+                        "runs; quadnav report DIR writes the report later)")
+    p.add_argument("--html", action="store_true",
+                   help="also write DIR/view.html, an interactive 3D page of the run that "
+                        "works offline (the same as quadnav view DIR)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     p.add_argument("-o", "--output", default="flight", metavar="DIR",
                    help="folder to write into, created if needed (default: flight)")

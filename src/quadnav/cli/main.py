@@ -13,11 +13,15 @@ import warnings
 from collections.abc import Sequence
 
 from quadnav import __version__
+from quadnav.cli.animate_command import add_animate_command
+from quadnav.cli.blender_command import add_blender_command
 from quadnav.cli.fly_command import add_fly_command
 from quadnav.cli.kino_command import add_kino_command
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
+from quadnav.cli.report_command import add_report_command
 from quadnav.cli.traj_command import add_traj_command
+from quadnav.cli.view_command import add_view_command
 from quadnav.cli.worlds_command import add_worlds_command
 from quadnav.errors import QuadnavError
 
@@ -40,9 +44,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"quadnav {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     add_fly_command(commands)
+    add_animate_command(commands)
+    add_blender_command(commands)
     add_map_commands(commands)
     add_plan_command(commands)
+    add_report_command(commands)
     add_traj_command(commands)
+    add_view_command(commands)
     add_kino_command(commands)
     add_worlds_command(commands)
     return parser

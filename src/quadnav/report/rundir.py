@@ -10,11 +10,12 @@ Files (every number SI, world frame z up):
 ``path.csv``       the refined path, ``x,y,z`` per vertex (only with a path)
 ``trajectory.csv`` the reference every 10 ms (only with a path)
 ``flight.csv``     the flight record (only with a path)
-``*.png``          figures (unless skipped)
+``*.png``          figures (unless skipped; only the 3D view without a path)
+``report.html``    the run report (:mod:`quadnav.report.html_report`, unless skipped)
 ================== ============================================================
 
-The viewer, the animation, the Blender scene and the report all start from
-:func:`read_run`, so they work on any folder a run left, long after the run.
+The figures, the viewer, the animation, the Blender scene and the report all start
+from :func:`read_run`, so they work on any folder a run left, long after the run.
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ from quadnav.world.mapfile import format_map
 TRAJECTORY_DT = 0.01
 #: Figures a run writes, in the order the report shows them.
 FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
+#: The HTML report ``quadnav fly`` writes after the other files (:mod:`.html_report`).
+REPORT = "report.html"
 #: Files written only when there is a path.
 FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
 TREE_HEADER = "x,y,z,parent"
@@ -47,8 +50,10 @@ TREE_HEADER = "x,y,z,parent"
 def write_run(mission: Mission, folder: Path, figures: bool = True) -> list[str]:
     """Write the run folder of ``mission`` (created if needed); returns the names written.
 
-    Files of an earlier run that this one does not write are removed, so the folder never
-    mixes two runs."""
+    The text files are written first; the figures are then drawn from the folder read
+    back (:func:`read_run`), as every other consumer draws them. Files of an earlier run
+    that this one does not write are removed (the report too: ``quadnav fly`` writes it
+    afterwards), so the folder never mixes two runs."""
     problem = mission.problem
     world = problem.world.replace(start=problem.start, goal=problem.goal,
                                   margin=problem.margin)
@@ -65,26 +70,22 @@ def write_run(mission: Mission, folder: Path, figures: bool = True) -> list[str]
         texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
         texts["flight.csv"] = flight_csv(mission.flight)
     folder.mkdir(parents=True, exist_ok=True)
-    for name in (*FLIGHT_FILES, *FIGURES):
+    for name in (*FLIGHT_FILES, *FIGURES, REPORT):
         if name not in texts:
             (folder / name).unlink(missing_ok=True)
     for name, text in texts.items():
         with atomic_output(folder / name) as tmp:
             tmp.write_text(text, encoding="utf-8")
-    if mission.flight is None or not figures:
+    if not figures:
         return list(texts)
     from quadnav.viz.figures import save_figure
-    from quadnav.viz.flight_figures import (
-        flight_3d_figure,
-        flight_states_figure,
-        tracking_error_figure,
-    )
+    from quadnav.viz.flight_figures import figure_makers
 
-    for name, figure in zip(FIGURES, (flight_3d_figure(mission),
-                                      flight_states_figure(mission.flight),
-                                      tracking_error_figure(mission.flight)), strict=True):
-        save_figure(figure, folder / name)
-    return [*texts, *FIGURES]
+    run = read_run(folder)
+    makers = figure_makers(run)
+    for name, make in makers.items():
+        save_figure(make(run), folder / name)
+    return [*texts, *makers]
 
 
 def _json(value) -> str:

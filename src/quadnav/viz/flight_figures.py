@@ -1,7 +1,14 @@
-"""Figures of a simulated flight: the mission over the map in 3D, desired against actual
-states, and the position tracking error against time."""
+"""Figures of a run folder read back (:class:`~quadnav.report.rundir.Run`): the run over
+the map in 3D, desired against actual states, and the position tracking error against
+time.
+
+Every consumer (``quadnav fly``, the report, the viewer) draws from the files a run
+wrote, so a figure always shows what the folder holds.
+"""
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -9,84 +16,94 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
-from quadnav.mission import Mission
-from quadnav.sim.flight import Ending, Flight
+from quadnav.report.rundir import FIGURES, FlightTable, Run
+from quadnav.sim.flight import Ending
 from quadnav.viz.map3d import draw_world
-from quadnav.viz.plan_figure import PATH_COLOR, draw_tree
-from quadnav.viz.trajectory_figures import AXIS_COLORS
+from quadnav.viz.plan_figure import draw_tree
+from quadnav.viz.style import (
+    AXIS_COLORS,
+    COLLISION_COLOR,
+    FLOWN_COLOR,
+    PATH_COLOR,
+    TRAJECTORY_COLOR,
+)
 
-#: Sample spacing of the drawn trajectory, s.
-TRAJECTORY_STEP = 0.02
-TRAJECTORY_COLOR = "tab:orange"
-FLOWN_COLOR = "black"
-COLLISION_COLOR = "magenta"
 #: The two views of :func:`flight_3d_figure`: title, elevation and azimuth, degrees.
 VIEWS = (("oblique view", 30.0, -60.0), ("top view", 90.0, -90.0))
 CM_PER_M = 100.0
 #: Least height of a states plot's y range, m or m/s, so that an axis barely moving is
 #: drawn flat instead of magnifying round-off.
 MIN_SPAN = 0.2
+#: Font sizes, points: legends and notes, titles. The figures are drawn at 120 dpi to be
+#: shown about 1100 pixels wide (the report's width).
+SMALL_FONT = 9
+TITLE_FONT = 10
+#: Height of the tracking error plot over the largest error, for the legend and the note.
+HEADROOM = 1.3
 
 
-def mission_outcome(mission: Mission) -> str:
-    """``success``, or why the flight failed: its ending and when, or the goal missed."""
-    flight = mission.flight
-    if flight is None:
-        return "not flown"
-    if mission.success:
+def run_outcome(metrics: dict) -> str:
+    """``success``, or why the run failed (from metrics.json): no path, the flight's ending
+    and when, or the goal missed."""
+    if not metrics["path_found"]:
+        return "no path"
+    if metrics["success"]:
         return "success"
-    if flight.ending is Ending.COMPLETED:
-        return f"goal missed by {flight.final_error:.2f} m"
-    return f"{flight.ending.value} at {flight.contact_time:.2f} s"
+    if metrics["ending"] == Ending.COMPLETED.value:
+        return f"goal missed by {metrics['final_error_m']:.2f} m"
+    return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
 
 
-def _draw_mission(ax: Axes3D, mission: Mission) -> list:
+def _draw_run(ax: Axes3D, run: Run) -> list:
     """The map, tree, path, trajectory and flown track (and a collision marker) on one
-    3D axes; returns the legend handles."""
-    problem, flight, trajectory = mission.problem, mission.flight, mission.trajectory
-    handles = draw_world(ax, problem.world, problem.start, problem.goal)
-    tree = draw_tree(ax, mission.plan.tree_edges())
+    3D axes, whichever the run has; returns the legend handles."""
+    world, metrics, flight = run.world, run.metrics, run.flight
+    handles = draw_world(ax, world, world.start, world.goal)
+    tree = draw_tree(ax, run.tree_edges())
     if tree is not None:
         handles.append(tree)
-    path = mission.plan.path
-    handles += ax.plot(*path.T, color=PATH_COLOR, linewidth=1.4, linestyle="--", zorder=20,
-                       label=f"path ({mission.plan.length:.2f} m, {len(path)} waypoints)")
-    handles += ax.plot(*trajectory.sample(TRAJECTORY_STEP).position.T, color=TRAJECTORY_COLOR,
-                       linewidth=2.6, alpha=0.85, zorder=21,
-                       label=f"trajectory ({trajectory.duration:.2f} s)")
-    handles += ax.plot(*flight.position.T, color=FLOWN_COLOR, linewidth=1.0, zorder=22,
-                       label=f"flown ({flight.duration:.2f} s)")
-    if flight.ending is Ending.COLLISION:
-        handles += ax.plot(*flight.position[-1:].T, color=COLLISION_COLOR, marker="X",
-                           markersize=13, markeredgecolor="black", linestyle="", zorder=30,
-                           label=f"collision (block {flight.contact_block}, "
-                                 f"{flight.contact_time:.2f} s)")
+    if run.path is not None:
+        handles += ax.plot(*run.path.T, color=PATH_COLOR, linewidth=1.6, linestyle="--",
+                           zorder=20, label=f"path ({metrics['path_length_m']:.2f} m, "
+                                            f"{len(run.path)} waypoints)")
+    if run.trajectory is not None:
+        handles += ax.plot(*run.trajectory.position.T, color=TRAJECTORY_COLOR, linewidth=2.6,
+                           alpha=0.85, zorder=21,
+                           label=f"trajectory ({run.trajectory.t[-1]:.2f} s)")
+    if flight is not None:
+        handles += ax.plot(*flight.position.T, color=FLOWN_COLOR, linewidth=1.0, zorder=22,
+                           label=f"flown ({flight.t[-1]:.2f} s)")
+        if metrics["ending"] == Ending.COLLISION.value:
+            handles += ax.plot(*flight.position[-1:].T, color=COLLISION_COLOR, marker="X",
+                               markersize=13, markeredgecolor="black", linestyle="",
+                               zorder=30, label=f"collision (block {metrics['contact_block']}, "
+                                                f"{metrics['contact_time_s']:.2f} s)")
     return handles
 
 
-def flight_3d_figure(mission: Mission) -> Figure:
+def flight_3d_figure(run: Run) -> Figure:
     """The map, the explored tree, the path (red, dashed), the trajectory and the flown
     track seen obliquely and from above, a cross where a collision stopped the flight;
     the title gives the map, the outcome, the RMS tracking error and the cruise speed.
-
-    ``mission.trajectory`` and ``mission.flight`` must not be None.
-    """
-    flight = mission.flight
-    fig = plt.figure(figsize=(15, 7.5), dpi=120)
+    A run without a path shows the map and the tree."""
+    metrics = run.metrics
+    fig = plt.figure(figsize=(11, 5.5), dpi=120)
     for column, (title, elev, azim) in enumerate(VIEWS):
         ax = fig.add_subplot(1, 2, column + 1, projection="3d")
-        handles = _draw_mission(ax, mission)
+        handles = _draw_run(ax, run)
         ax.view_init(elev=elev, azim=azim)
         if elev == 90.0:  # a plan view: no perspective, and no height axis to read
             ax.set_proj_type("ortho")
             ax.set_zticks([])
             ax.set_zlabel("")
-        ax.set_title(title, fontsize=9)
+        ax.set_title(title, fontsize=TITLE_FONT)
         if column == 0:
-            ax.legend(handles=handles, loc="upper left", fontsize=8)
-    fig.suptitle(f"{mission.problem.world.name}\n{mission_outcome(mission)}: RMS tracking error "
-                 f"{CM_PER_M * flight.rms_tracking_error:.2f} cm, cruise speed "
-                 f"{mission.settings.trajectory.v_max:g} m/s", fontsize=9)
+            ax.legend(handles=handles, loc="upper left", fontsize=SMALL_FONT)
+    summary = run_outcome(metrics)
+    if run.flight is not None:
+        summary += (f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm, "
+                    f"cruise speed {metrics['speed_m_s']:g} m/s")
+    fig.suptitle(f"{metrics['map']}\n{summary}", fontsize=TITLE_FONT)
     fig.tight_layout()
     return fig
 
@@ -99,12 +116,28 @@ def _widen(ax: Axes, span: float) -> None:
         ax.set_ylim(middle - span / 2, middle + span / 2)
 
 
-def flight_states_figure(flight: Flight) -> Figure:
+def _flight(run: Run) -> FlightTable:
+    if run.flight is None:
+        raise ValueError(f"{run.folder}: the run has no flight (no path was found)")
+    return run.flight
+
+
+def desired_velocity(run: Run) -> np.ndarray:
+    """(N, 3) the reference velocity at the flight's sample times, m/s: trajectory.csv's
+    velocity linearly interpolated (held at its last value, rest, after its end)."""
+    flight, trajectory = _flight(run), run.trajectory
+    return np.column_stack([np.interp(flight.t, trajectory.t, trajectory.velocity[:, axis])
+                            for axis in range(3)])
+
+
+def flight_states_figure(run: Run) -> Figure:
     """Desired (dashed) against actual (solid) position and velocity per axis against
-    time: rows x, y, z; columns position (m), velocity (m/s)."""
+    time: rows x, y, z; columns position (m), velocity (m/s). The desired position is
+    flight.csv's reference, the desired velocity :func:`desired_velocity`."""
+    flight = _flight(run)
     fig, axes = plt.subplots(3, 2, figsize=(11, 8), dpi=120, sharex=True)
-    columns = (("position", "m", flight.reference[:, 0:3], flight.position),
-               ("velocity", "m/s", flight.reference[:, 3:6], flight.velocity))
+    columns = (("position", "m", flight.reference, flight.position),
+               ("velocity", "m/s", desired_velocity(run), flight.velocity))
     for column, (name, unit, desired, actual) in enumerate(columns):
         for axis, color in enumerate(AXIS_COLORS):
             ax = axes[axis, column]
@@ -115,37 +148,56 @@ def flight_states_figure(flight: Flight) -> Figure:
             symbol = "xyz"[axis]
             ax.set_ylabel(f"{symbol if column == 0 else 'v' + symbol} ({unit})")
             ax.grid(alpha=0.3)
-        axes[0, column].set_title(name, fontsize=9)
-        axes[0, column].legend(loc="upper right", fontsize=7, ncol=2)
+        axes[0, column].set_title(name, fontsize=TITLE_FONT)
+        axes[0, column].legend(loc="upper right", fontsize=SMALL_FONT, ncol=2)
         axes[-1, column].set_xlabel("time (s)")
-    fig.suptitle(f"desired and actual states: {flight.ending.value} after "
-                 f"{flight.duration:.2f} s", fontsize=9)
+    fig.suptitle(f"desired and actual states: {run.metrics['ending']} after "
+                 f"{flight.t[-1]:.2f} s", fontsize=TITLE_FONT)
     fig.tight_layout()
     return fig
 
 
-def tracking_error_figure(flight: Flight) -> Figure:
+def tracking_error(flight: FlightTable) -> np.ndarray:
+    """(N,) distance from the reference position at each recorded sample, m."""
+    return np.linalg.norm(flight.position - flight.reference, axis=1)
+
+
+def tracking_error_figure(run: Run) -> Figure:
     """The distance from the reference position against time, cm, with the RMS as a
-    dashed line and the largest recorded error marked."""
-    error = CM_PER_M * flight.tracking_error
-    rms = CM_PER_M * flight.rms_tracking_error
+    dashed line and the largest recorded error marked; the RMS and maximum over every
+    control step (metrics.json) are in the title."""
+    flight, metrics = _flight(run), run.metrics
+    error = CM_PER_M * tracking_error(flight)
+    rms = CM_PER_M * metrics["rms_tracking_error_m"]
+    duration = flight.t[-1]
     fig, ax = plt.subplots(figsize=(9, 4), dpi=120)
     ax.plot(flight.t, error, color="tab:blue", linewidth=1.2, label="tracking error")
     ax.axhline(rms, color="black", linestyle="--", linewidth=0.8, label=f"RMS {rms:.2f} cm")
     peak = int(np.argmax(error))
     ax.plot(flight.t[peak], error[peak], color="tab:red", marker="o", linestyle="",
             label="_max")
-    left = flight.t[peak] <= 0.5 * flight.duration  # the label goes on the roomier side
+    left = flight.t[peak] <= 0.5 * duration  # the label goes on the roomier side
     ax.annotate(f"max {error[peak]:.2f} cm at {flight.t[peak]:.2f} s",
                 (flight.t[peak], error[peak]), xytext=(8 if left else -8, 4),
-                textcoords="offset points", fontsize=8, ha="left" if left else "right")
+                textcoords="offset points", fontsize=SMALL_FONT,
+                ha="left" if left else "right")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (cm)")
-    ax.set_ylim(bottom=0.0, top=1.15 * max(float(error.max()), rms, 1e-6))
+    ax.set_ylim(bottom=0.0, top=HEADROOM * max(float(error.max()), rms, 1e-6))
     ax.grid(alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(f"position tracking error ({flight.ending.value} after "
-                 f"{flight.duration:.2f} s); over every control step: RMS {rms:.2f} cm, "
-                 f"max {CM_PER_M * flight.max_tracking_error:.2f} cm", fontsize=9)
+    ax.legend(loc="upper right" if left else "upper left", fontsize=SMALL_FONT, ncol=2)
+    ax.set_title(f"position tracking error ({metrics['ending']} after {duration:.2f} s)\n"
+                 f"over every control step: RMS {rms:.2f} cm, "
+                 f"max {CM_PER_M * metrics['max_tracking_error_m']:.2f} cm",
+                 fontsize=TITLE_FONT)
     fig.tight_layout()
     return fig
+
+
+def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
+    """The figures ``run`` has, by their file name in the run folder, in the order of
+    :data:`~quadnav.report.rundir.FIGURES`: the 3D view always, the states and the
+    tracking error when there was a flight."""
+    makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
+                                tracking_error_figure), strict=True))
+    return makers if run.flight is not None else {FIGURES[0]: flight_3d_figure}

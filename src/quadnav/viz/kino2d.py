@@ -23,14 +23,12 @@ from quadnav.kinodynamic.diffdrive import (
 )
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.world2d import World2D
-from quadnav.viz.map3d import GOAL_COLOR, START_COLOR
+from quadnav.viz.style import GOAL_COLOR, PATH_COLOR, START_COLOR, TREE_COLOR
 
 #: Tree edges drawn at most; a larger tree is thinned to an evenly spread subset.
 MAX_TREE_EDGES = 20_000
 #: Chords each tree edge is drawn with.
 TREE_EDGE_CHORDS = 8
-TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
-PATH_COLOR = "red"
 LEFT_COLOR = "tab:purple"
 RIGHT_COLOR = "tab:orange"
 RECT_COLOR = (0.6, 0.6, 0.6)

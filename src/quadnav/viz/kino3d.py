@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.viz.map3d import draw_world
+from quadnav.viz.style import PATH_COLOR, TREE_COLOR
 from quadnav.world.model import World
 
 #: Chord segments drawn for the tree at most; a larger tree is thinned evenly.
@@ -23,8 +24,6 @@ MAX_TREE_SEGMENTS = 20_000
 #: Chords per tree edge, and per path edge.
 TREE_PIECES = 4
 PATH_PIECES = 16
-TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
-PATH_COLOR = "red"
 FLOWN_COLOR = "darkorange"
 
 

@@ -15,14 +15,13 @@ from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+from quadnav.viz.style import GOAL_COLOR, START_COLOR
 from quadnav.world.model import World
 
 # Corner indices of the six faces of a box whose corners are numbered by bits (x, y, z).
 _FACES = np.array([[0, 1, 3, 2], [4, 5, 7, 6], [0, 1, 5, 4],
                    [2, 3, 7, 6], [0, 2, 6, 4], [1, 3, 7, 5]])
 _CORNER_BITS = np.array([[(i >> 0) & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)])
-START_COLOR = "red"
-GOAL_COLOR = "green"
 
 
 def box_faces(boxes: np.ndarray) -> np.ndarray:

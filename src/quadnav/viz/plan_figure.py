@@ -12,11 +12,10 @@ from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
 from quadnav.viz.map3d import draw_world
+from quadnav.viz.style import PATH_COLOR, TREE_COLOR
 
 #: Tree edges drawn at most; a larger tree is thinned to an evenly spread subset.
 MAX_TREE_EDGES = 20_000
-TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
-PATH_COLOR = "red"
 
 
 def draw_tree(ax: Axes3D, edges: np.ndarray) -> Line2D | None:

@@ -11,11 +11,11 @@ from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.trajectory.model import Trajectory
 from quadnav.viz.map3d import draw_world
+from quadnav.viz.style import AXIS_COLORS
 from quadnav.world.model import World
 
 #: Samples per second drawn.
 DRAW_RATE = 100.0
-AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
 
 
 def trajectory_3d_figure(world: World, trajectory: Trajectory,

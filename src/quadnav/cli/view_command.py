@@ -1,0 +1,32 @@
+"""``quadnav view``: a run folder as one interactive 3D page to open in a browser."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from quadnav.report.rundir import read_run
+from quadnav.viz.html_viewer import VIEW_PAGE, write_viewer
+
+
+def view(args: argparse.Namespace) -> int:
+    """Read the run folder, write its page; print where it went."""
+    run = read_run(args.folder)
+    written = write_viewer(run, Path(args.output) if args.output else run.folder / VIEW_PAGE)
+    print(f"wrote {written}")
+    return 0
+
+
+def add_view_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav view`` on the top-level subparsers."""
+    p = subparsers.add_parser(
+        "view", help="write an interactive 3D page (HTML) of a quadnav fly output folder",
+        description="Write one self-contained HTML page showing the run in DIR (written by "
+                    "quadnav fly -o DIR): the map, the explored tree, the path, the trajectory "
+                    "coloured by speed, the flown track, a time slider moving the drone along "
+                    "the flight, and the metrics. Drag to rotate, wheel to zoom. The page "
+                    "needs no network and no files beside it; open it in any browser.")
+    p.add_argument("folder", metavar="DIR", help="a folder written by quadnav fly -o DIR")
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help=f"the page to write (default: DIR/{VIEW_PAGE})")
+    p.set_defaults(handler=view)

@@ -1,0 +1,221 @@
+"""A run report to hand in: one self-contained HTML file over one or more run folders.
+
+Each run gets a section: the map and outcome, the figures of the run (the explored tree
+with the path in red, desired against actual position and velocity, the tracking
+error), the metrics (metrics.json) and every parameter used (parameters.json, flattened
+to dotted names). Images are embedded as base64 PNG and the style is inline, so the file
+opens anywhere, offline, on its own. Figures are the PNG files of the folder when it has
+them, else drawn from the folder read back, by the same functions.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import struct
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
+
+from quadnav import __version__
+from quadnav.errors import QuadnavError
+from quadnav.files import atomic_output
+from quadnav.report.rundir import Run
+from quadnav.viz.flight_figures import figure_makers, run_outcome
+
+#: File name endings accepted for a report.
+SUFFIXES = (".html", ".htm")
+CM_PER_M = 100.0
+#: Units of metrics.json values by key ending, longest first.
+UNITS = (("_m_s", "m/s"), ("_s", "s"), ("_m", "m"))
+#: What each figure shows, by its file name in the run folder.
+CAPTIONS = {
+    "flight_3d.png": "The map with the explored tree (blue), the path (red, dashed), the "
+                     "trajectory (orange) and the flown track (black), seen obliquely and "
+                     "from above.",
+    "flight_states.png": "Desired (dashed) against actual (solid) position and velocity per "
+                         "axis against time.",
+    "tracking_error.png": "Distance from the reference position against time, with its RMS "
+                          "(dashed) and the largest recorded error.",
+}
+STYLE = """
+body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
+       color: #222; margin: 0; background: #fff; line-height: 1.45; }
+main { max-width: 1120px; margin: 0 auto; padding: 1.5em; }
+h1 { font-size: 1.6em; margin-bottom: 0.2em; }
+h2 { font-size: 1.3em; border-bottom: 2px solid #ccc; padding-bottom: 0.2em;
+     margin-top: 2.2em; overflow-wrap: anywhere; }
+h3 { font-size: 1.05em; margin-top: 1.6em; }
+.outcome { font-weight: 600; }
+.success { color: #1a7f37; }
+.failure { color: #c62828; }
+figure { margin: 1em 0; }
+figure img { max-width: 100%; height: auto; border: 1px solid #e4e4e4; }
+figcaption { font-size: 0.9em; color: #555; }
+table { border-collapse: collapse; font-size: 0.9em; margin: 0.5em 0; }
+th, td { border: 1px solid #ddd; padding: 0.25em 0.6em; text-align: left;
+         vertical-align: top; }
+th { background: #f3f3f3; }
+td.value { font-family: ui-monospace, Menlo, Consolas, monospace; overflow-wrap: anywhere; }
+code { font-family: ui-monospace, Menlo, Consolas, monospace; font-size: 0.95em; }
+.muted { color: #666; font-size: 0.9em; overflow-wrap: anywhere; }
+@media print { section + section { break-before: page; } main { max-width: none; } }
+"""
+
+
+def check_report_path(path: str | Path) -> Path:
+    """``path`` as a Path; QuadnavError unless it ends in .html (or .htm) in a folder
+    that exists."""
+    path = Path(path)
+    if path.suffix.lower() not in SUFFIXES:
+        raise QuadnavError(f"{path}: expected a file name ending in .html")
+    if not path.parent.is_dir():
+        raise QuadnavError(f"{path}: folder {str(path.parent)!r} does not exist")
+    return path
+
+
+def format_value(value: object) -> str:
+    """A JSON value as text: numbers to 6 significant digits, lists in brackets, null as
+    a dash."""
+    if value is None:
+        return "—"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(format_value(item) for item in value) + "]"
+    return str(value)
+
+
+def flatten(value: object, prefix: str = "") -> list[tuple[str, object]]:
+    """Nested dictionaries as (dotted name, leaf value) rows, in file order."""
+    if not isinstance(value, dict):
+        return [(prefix, value)]
+    rows: list[tuple[str, object]] = []
+    for key, item in value.items():
+        rows += flatten(item, f"{prefix}.{key}" if prefix else str(key))
+    return rows
+
+
+def unit_of(key: str) -> str:
+    """The unit a metrics.json key ends in (``_m``, ``_s``, ``_m_s``), or ''."""
+    return next((unit for ending, unit in UNITS if key.endswith(ending)), "")
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[str]], value_column: int) -> str:
+    """An HTML table of already escaped cells; the ``value_column`` is set monospace."""
+    head = "".join(f"<th>{cell}</th>" for cell in header)
+    body = "".join(
+        "<tr>" + "".join(f'<td class="value">{cell}</td>' if column == value_column
+                         else f"<td>{cell}</td>" for column, cell in enumerate(row)) + "</tr>"
+        for row in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
+    """The figure ``name`` of ``run``: the folder's PNG file, or drawn by ``make``."""
+    path = run.folder / name
+    if path.is_file():
+        return path.read_bytes()
+    fig = make(run)
+    buffer = io.BytesIO()
+    try:
+        fig.savefig(buffer, format="png")
+    finally:
+        plt.close(fig)
+    return buffer.getvalue()
+
+
+def _figure(png: bytes, name: str) -> str:
+    width, height = struct.unpack(">II", png[16:24])  # from the PNG's IHDR chunk
+    data = base64.b64encode(png).decode("ascii")
+    return (f'<figure><img src="data:image/png;base64,{data}" width="{width}" '
+            f'height="{height}" alt="{html.escape(CAPTIONS[name])}">'
+            f"<figcaption>{html.escape(CAPTIONS[name])}</figcaption></figure>")
+
+
+def _summary(run: Run) -> str:
+    """The outcome and the headline numbers of a run, one line of HTML."""
+    m = run.metrics
+    parts = [f"{m['planner']} seed {m['seed']}", f"vehicle {m['vehicle']}",
+             f"cruise {m['speed_m_s']:g} m/s"]
+    if run.flight is not None:
+        clearance = m["min_clearance_m"]
+        parts += [f"path {m['path_length_m']:.2f} m", f"flight {m['flight_time_s']:.2f} s",
+                  f"tracking error RMS {CM_PER_M * m['rms_tracking_error_m']:.2f} cm, max "
+                  f"{CM_PER_M * m['max_tracking_error_m']:.2f} cm",
+                  f"final error {CM_PER_M * m['final_error_m']:.2f} cm",
+                  "min clearance " + ("none" if clearance is None else f"{clearance:.3f} m")]
+    status = "success" if m["success"] else "failure"
+    return (f'<p><span class="outcome {status}">{html.escape(run_outcome(m))}</span> — '
+            f"{html.escape(', '.join(parts))}</p>")
+
+
+def run_section(run: Run, number: int) -> str:
+    """The report section of one run (anchor ``run-NUMBER``)."""
+    m = run.metrics
+    world = run.world
+    size = " x ".join(f"{extent:g}" for extent in world.extent)
+    figures = "".join(_figure(_png(run, name, make), name)
+                      for name, make in figure_makers(run).items())
+    metrics = _table(("metrics.json key", "value", "unit"),
+                     [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)),
+                       unit_of(key)) for key, value in m.items()], 1)
+    parameters = _table(("parameter", "value"),
+                        [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)))
+                         for key, value in flatten(run.parameters)], 1)
+    return (f'<section id="run-{number}"><h2>Run {number}: {html.escape(m["map"])}</h2>'
+            f'<p class="muted">folder {html.escape(str(run.folder))}; map {size} m with '
+            f"{len(world.blocks)} blocks, start {html.escape(format_value(m['start']))} m, "
+            f"goal {html.escape(format_value(m['goal']))} m, margin "
+            f"{m['margin_m']:g} m</p>{_summary(run)}"
+            f"<h3>Figures</h3>{figures}"
+            f"<h3>Metrics</h3>{metrics}"
+            f"<h3>Parameters</h3>{parameters}</section>")
+
+
+def _overview(runs: Sequence[Run]) -> str:
+    """A table of every run's outcome and headline numbers, linking to its section."""
+
+    def number(value: float | None, scale: float = 1.0) -> str:
+        return "—" if value is None else f"{scale * value:.2f}"
+
+    rows = [(f'<a href="#run-{k}">{k}</a>', html.escape(run.metrics["map"]),
+             html.escape(run_outcome(run.metrics)), number(run.metrics["path_length_m"]),
+             number(run.metrics.get("flight_time_s")),
+             number(run.metrics.get("rms_tracking_error_m"), CM_PER_M),
+             number(run.metrics.get("max_tracking_error_m"), CM_PER_M))
+            for k, run in enumerate(runs, start=1)]
+    return "<h2>Overview</h2>" + _table(
+        ("run", "map", "outcome", "path (m)", "flight (s)", "RMS error (cm)",
+         "max error (cm)"), rows, 1)
+
+
+def report_html(runs: Sequence[Run]) -> str:
+    """The whole report over ``runs`` (at least one) as one HTML document."""
+    title = ("quadnav flight report" if len(runs) > 1
+             else f"quadnav flight report: {runs[0].metrics['map']}")
+    sections = "".join(run_section(run, k) for k, run in enumerate(runs, start=1))
+    overview = _overview(runs) if len(runs) > 1 else ""
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+            f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
+            f"<body><main><h1>quadnav flight report</h1>"
+            f'<p class="muted">{len(runs)} run{"s" if len(runs) > 1 else ""}, written by '
+            f"quadnav {__version__} from the files of each run folder. Units are SI "
+            f"(metres, seconds) unless a column says otherwise.</p>"
+            f"{overview}{sections}</main></body></html>\n")
+
+
+def write_report(runs: Sequence[Run], path: str | Path) -> Path:
+    """Write :func:`report_html` of ``runs`` to ``path`` (.html), whole or not at all;
+    returns the path. QuadnavError for a bad path."""
+    path = check_report_path(path)
+    text = report_html(runs)
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path

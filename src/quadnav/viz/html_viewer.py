@@ -1,0 +1,132 @@
+"""A run as one self-contained HTML page to explore in a browser, offline.
+
+The page (``quadnav view DIR``, ``quadnav fly --html``) shows the map (blocks in their
+colours, the boundary as a transparent box), the explored tree, the path in red, the
+trajectory coloured by speed, the flown track, start and goal, and a drone marker that a
+time slider moves along the flight; beside it, the metrics. Rotate by dragging, zoom with
+the wheel. No network is needed: the renderer (plain JavaScript drawing on a 2D canvas,
+package data in ``viewer/``) and the run's numbers (JSON) are written into the page.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from quadnav.files import atomic_output
+from quadnav.report.rundir import Run
+
+#: Tree edges written into the page at most; a larger tree is thinned to an evenly spread
+#: subset, which keeps the page a few MB at most and drawing it interactive.
+MAX_TREE_EDGES = 20_000
+#: Decimals kept of positions (so 1 mm), speeds (1 mm/s) and times (1 ms).
+DECIMALS = 3
+#: Decimals kept of the attitude quaternions.
+QUATERNION_DECIMALS = 4
+#: Name of the page in a run folder.
+VIEW_PAGE = "view.html"
+_ASSETS = resources.files("quadnav.viz") / "viewer"
+#: The places in template.html that the page fills in.
+_TOKEN = re.compile(r"\{\{(TITLE|VIEWER_JS|RUN_DATA)\}\}")
+
+
+def _numbers(values: np.ndarray, decimals: int = DECIMALS) -> list[float]:
+    """``values`` rounded and flattened to a list (row after row), for JSON."""
+    return np.round(np.asarray(values, dtype=float), decimals).ravel().tolist()
+
+
+def _point(value: np.ndarray | None) -> list[float] | None:
+    return None if value is None else _numbers(value)
+
+
+def thin_edges(edges: np.ndarray, limit: int = MAX_TREE_EDGES) -> np.ndarray:
+    """At most ``limit`` of the segments ``edges`` (E, 2, 3), evenly spread over them."""
+    return edges[np.linspace(0, len(edges) - 1, min(len(edges), limit)).astype(int)]
+
+
+def _subtitle(metrics: dict) -> str:
+    """One line: the outcome, then the planner, vehicle, cruise speed, path length and flight
+    time that metrics.json gives (a missing one is left out)."""
+    if metrics.get("success"):
+        outcome = "success"
+    elif not metrics.get("path_found", True):
+        outcome = "FAILED: no path found"
+    elif metrics.get("collision"):
+        outcome = "FAILED: collision"
+    else:
+        outcome = "FAILED: goal missed"
+    parts = [outcome]
+    for key, text in (("planner", "{}"), ("seed", "seed {}"), ("vehicle", "vehicle {}"),
+                      ("speed_m_s", "cruise {:g} m/s"), ("path_length_m", "path {:.2f} m"),
+                      ("flight_time_s", "flight {:.2f} s")):
+        if metrics.get(key) is not None:
+            parts.append(text.format(metrics[key]))
+    return " \u00b7 ".join(parts)
+
+
+def viewer_data(run: Run) -> dict:
+    """The numbers the page draws, as JSON-ready lists (positions flattened x, y, z after
+    x, y, z, in m; speeds in m/s; times in s). ``path``, ``trajectory`` and ``flight`` are
+    None for a run that found no path."""
+    world, edges = run.world, run.tree_edges()
+    data = {
+        "title": run.metrics.get("map") or world.name,
+        "subtitle": _subtitle(run.metrics),
+        "boundary": _numbers(world.boundary),
+        "blocks": _numbers(world.blocks),
+        "colors": _numbers(world.colors),
+        "start": _point(world.start),
+        "goal": _point(world.goal),
+        "tree": _numbers(thin_edges(edges)),
+        "treeEdges": len(edges),
+        "path": _point(run.path),
+        "trajectory": None,
+        "flight": None,
+        "collision": bool(run.metrics.get("collision")),
+        "armLength": float(run.parameters.get("vehicle", {}).get("arm_length", 0.0)),
+        "metrics": run.metrics,
+    }
+    if run.trajectory is not None:
+        data["trajectory"] = {
+            "position": _numbers(run.trajectory.position),
+            "speed": _numbers(np.linalg.norm(run.trajectory.velocity, axis=1)),
+        }
+    if run.flight is not None:
+        data["flight"] = {
+            "t": _numbers(run.flight.t),
+            "position": _numbers(run.flight.position),
+            "speed": _numbers(np.linalg.norm(run.flight.velocity, axis=1)),
+            "attitude": _numbers(run.flight.attitude, QUATERNION_DECIMALS),
+        }
+    return data
+
+
+def _script_json(value: dict) -> str:
+    """``value`` as JSON that is safe inside a ``<script>`` element (no ``<`` at all, so no
+    ``</script>`` can end it early)."""
+    return json.dumps(value, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
+
+
+def viewer_html(run: Run) -> str:
+    """The self-contained page of ``run``: the template with the renderer and the run's
+    data written in (no external references)."""
+    data = viewer_data(run)
+    parts = {"TITLE": html.escape(f"quadnav: {data['title']}"),
+             "VIEWER_JS": (_ASSETS / "viewer.js").read_text(encoding="utf-8"),
+             "RUN_DATA": _script_json(data)}
+    template = (_ASSETS / "template.html").read_text(encoding="utf-8")
+    return _TOKEN.sub(lambda match: parts[match[1]], template)
+
+
+def write_viewer(run: Run, path: str | Path) -> Path:
+    """Write the page of ``run`` to ``path`` (whole or not at all); returns the path."""
+    path = Path(path)
+    page = viewer_html(run)
+    with atomic_output(path) as tmp:
+        tmp.write_text(page, encoding="utf-8")
+    return path

@@ -1,0 +1,248 @@
+"""The HTML viewer: ``quadnav view``, ``quadnav fly --html``, and the page in a real browser.
+
+The browser tests drive Debian's chromium through chromedriver (selenium); they skip when
+either is missing (``apt-get install chromium chromium-driver``, ``pip install selenium``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import html
+import io
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+from clitools import assert_user_error, run
+from PIL import Image
+
+from quadnav.cli.main import main
+from quadnav.mission import MissionSettings, fly_mission
+from quadnav.planning import PlannerSettings
+from quadnav.report.rundir import read_run, write_run
+from quadnav.viz.html_viewer import (
+    MAX_TREE_EDGES,
+    VIEW_PAGE,
+    viewer_data,
+    viewer_html,
+    write_viewer,
+)
+from quadnav.world import load_world
+
+SMALL = "forest:size=12x12x4,seed=2"
+#: Most bytes a page of the small run may take (the tree, thinned, dominates).
+MAX_PAGE_BYTES = 3_000_000
+#: Fewest distinct colours in a screenshot of a drawn scene (a blank canvas has one).
+MIN_COLOURS = 500
+READOUT = re.compile(r"t = ([\d.]+) s\s+position \(([-\d.]+), ([-\d.]+), ([-\d.]+)\) m"
+                     r"\s+speed ([\d.]+) m/s")
+
+
+@pytest.fixture(scope="module")
+def flown(tmp_path_factory):
+    """A run folder of a successful flight, written with ``--html``, and the fly result."""
+    folder = tmp_path_factory.mktemp("flown")
+    result = run("fly", SMALL, "-o", folder, "--quiet", "--no-figures", "--html")
+    assert result.returncode == 0, result.stderr
+    return folder, result
+
+
+@pytest.fixture(scope="module")
+def unsolved(tmp_path_factory):
+    """A run folder of a search that found no path (20 samples are too few)."""
+    folder = tmp_path_factory.mktemp("unsolved")
+    mission = fly_mission(load_world(SMALL),
+                          settings=MissionSettings(planning=PlannerSettings(max_iterations=20)))
+    assert mission.flight is None
+    write_run(mission, folder, figures=False)
+    write_viewer(read_run(folder), folder / VIEW_PAGE)
+    return folder
+
+
+def _page_data(page: str) -> dict:
+    match = re.search(r'<script id="run-data" type="application/json">(.*?)</script>', page, re.S)
+    return json.loads(match[1])
+
+
+def test_fly_html_writes_a_self_contained_page(flown):
+    folder, result = flown
+    page_path = folder / "view.html"
+    assert str(page_path) in result.stdout
+    page = page_path.read_text(encoding="utf-8")
+    assert 10_000 < len(page.encode()) < MAX_PAGE_BYTES
+    assert "http://" not in page and "https://" not in page
+    for tag in re.findall(r"<(?:script|link|img|iframe)\b[^>]*>", page):
+        assert not re.search(r"\bsrc=", tag), tag
+        assert not re.search(r"\bhref=(?![\"']data:)", tag), tag
+    data = _page_data(page)
+    metrics = json.loads((folder / "metrics.json").read_text())
+    assert data["metrics"] == metrics and data["title"] == metrics["map"]
+    assert data["treeEdges"] > MAX_TREE_EDGES  # so the thinning is exercised
+    assert len(data["tree"]) == 6 * MAX_TREE_EDGES
+    flight = read_run(folder).flight
+    assert len(data["flight"]["t"]) == len(flight.t)
+    assert data["flight"]["position"][-3:] == pytest.approx(flight.position[-1], abs=1e-3)
+
+
+def test_view_writes_the_same_page_as_fly(flown, tmp_path):
+    folder, _ = flown
+    copy = shutil.copytree(folder, tmp_path / "copy", ignore=shutil.ignore_patterns("*.html"))
+    result = run("view", copy)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == f"wrote {copy / 'view.html'}"
+    assert (copy / "view.html").read_bytes() == (folder / "view.html").read_bytes()
+
+
+def test_a_run_without_a_path_has_no_flight_data(unsolved):
+    data = viewer_data(read_run(unsolved))
+    assert data["path"] is data["trajectory"] is data["flight"] is None
+    assert data["blocks"] and data["tree"] and data["metrics"]["path_found"] is False
+    assert data["subtitle"].startswith("FAILED: no path found")
+
+
+def test_text_from_the_run_cannot_break_out_of_the_page(unsolved):
+    name = "</script><script>alert(1)</script> & <b>"
+    original = read_run(unsolved)
+    page = viewer_html(dataclasses.replace(original, metrics={**original.metrics, "map": name}))
+    assert page.count("</script>") == 2  # the data's and the renderer's own
+    assert f"<title>quadnav: {html.escape(name)}</title>" in page
+    data = _page_data(page)
+    assert data["title"] == data["metrics"]["map"] == name
+
+
+def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
+    assert_user_error(run("view", tmp_path), str(tmp_path), "not a quadnav fly output folder")
+    folder, _ = flown
+    page = tmp_path / "no/such/dir/page.html"
+    assert main(["view", str(folder), "-o", str(page)]) == 2
+    error = capsys.readouterr().err
+    assert error == f"quadnav: error: {page}: cannot write: No such file or directory\n"
+    assert not list(tmp_path.iterdir())
+
+
+# ---------------------------------------------------------------- in a real browser
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless chromium driven by selenium, logging the console; skips without them."""
+    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
+    if not (chromium and driver_path):
+        pytest.skip("needs chromium and chromedriver on PATH "
+                    "(Debian: apt-get install chromium chromium-driver)")
+    webdriver = pytest.importorskip("selenium.webdriver",
+                                    reason="needs selenium (pip install selenium)")
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
+                     "--disable-dev-shm-usage", "--window-size=1280,860"):
+        options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path),
+                              options=options)
+    yield driver
+    driver.quit()
+
+
+def _open(driver, page) -> None:
+    """Load the page and wait until the canvas has been drawn."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    driver.get(page.as_uri())
+    WebDriverWait(driver, 10, poll_frequency=0.05).until(
+        lambda d: d.execute_script("return Number(document.getElementById('view')"
+                                   ".dataset.frames || 0)") > 0)
+
+
+def _canvas_png(driver) -> bytes:
+    return driver.find_element("id", "view").screenshot_as_png
+
+
+def _colours(png: bytes) -> int:
+    return len(Image.open(io.BytesIO(png)).convert("RGB").getcolors(1 << 24))
+
+
+def _redrawn(driver, before: bytes) -> bytes:
+    """The canvas once it differs from ``before`` (drawing waits for the next frame)."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    return WebDriverWait(driver, 5, poll_frequency=0.05).until(
+        lambda d: (png := _canvas_png(d)) != before and png)
+
+
+def _errors(driver) -> list[dict]:
+    return [entry for entry in driver.get_log("browser") if entry["level"] == "SEVERE"]
+
+
+def _readout(driver) -> tuple[float, ...]:
+    text = driver.find_element("id", "readout").text
+    match = READOUT.search(text)
+    assert match, text
+    return tuple(map(float, match.groups()))
+
+
+def test_the_page_draws_the_run_without_errors(browser, flown):
+    folder, _ = flown
+    _open(browser, folder / "view.html")
+    canvas = browser.find_element("id", "view")
+    assert canvas.size["width"] > 400 and canvas.size["height"] > 300
+    assert _colours(_canvas_png(browser)) > MIN_COLOURS
+    metrics = json.loads((folder / "metrics.json").read_text())
+    rows = browser.find_elements("css selector", "#metrics tr")
+    assert len(rows) == len(metrics)
+    assert browser.find_element("id", "timebar").is_displayed()
+    ticks = browser.find_element("id", "scale-ticks").text.split()
+    top_speed = np.linalg.norm(read_run(folder).trajectory.velocity, axis=1).max()
+    assert ticks[0] == "0.00" and float(ticks[-1]) == pytest.approx(top_speed, abs=0.01)
+    assert _errors(browser) == []
+
+
+def test_the_slider_and_play_move_the_drone(browser, flown):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    folder, _ = flown
+    _open(browser, folder / "view.html")
+    metrics = json.loads((folder / "metrics.json").read_text())
+    assert _readout(browser) == pytest.approx((0, *metrics["start"], 0), abs=1e-2)
+    before = _canvas_png(browser)
+    browser.execute_script("const s = document.getElementById('time');"
+                           "s.value = s.max; s.dispatchEvent(new Event('input'));")
+    t, x, y, z, _ = _readout(browser)
+    assert t == pytest.approx(metrics["flight_time_s"], abs=0.01)
+    assert (x, y, z) == pytest.approx(metrics["goal"], abs=0.02)
+    _redrawn(browser, before)  # the drone marker moved
+    browser.find_element("id", "play").click()  # from the end: plays again from the start
+    WebDriverWait(browser, 10, poll_frequency=0.05).until(
+        lambda d: 0.2 < _readout(d)[0] < metrics["flight_time_s"])
+    assert browser.find_element("id", "play").text == "pause"
+    browser.find_element("id", "play").click()
+    assert _errors(browser) == []
+
+
+def test_dragging_and_the_wheel_change_the_view(browser, flown):
+    from selenium.webdriver import ActionChains
+    from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
+
+    folder, _ = flown
+    _open(browser, folder / "view.html")
+    canvas = browser.find_element("id", "view")
+    before = _canvas_png(browser)
+    ActionChains(browser).drag_and_drop_by_offset(canvas, 120, 40).perform()
+    rotated = _redrawn(browser, before)
+    ActionChains(browser).scroll_from_origin(ScrollOrigin.from_element(canvas), 0, -300).perform()
+    zoomed = _redrawn(browser, rotated)
+    assert _colours(zoomed) > MIN_COLOURS
+    assert _errors(browser) == []
+
+
+def test_a_run_without_a_path_draws_map_tree_and_metrics(browser, unsolved):
+    _open(browser, unsolved / "view.html")
+    assert _colours(_canvas_png(browser)) > MIN_COLOURS / 5
+    labels = browser.find_element("id", "layers").text
+    assert "blocks" in labels and re.search(r"tree \(\d+ edges\)", labels)
+    assert "trajectory" not in labels and "drone" not in labels
+    assert not browser.find_element("id", "timebar").is_displayed()
+    assert browser.find_elements("css selector", "#metrics tr")
+    assert _errors(browser) == []
