@@ -26,3 +26,18 @@ def shared_maps() -> Path:
 def optional_shared_maps() -> Path | None:
     """The public map corpus folder, or None when it is absent (for tests that need not skip)."""
     return SHARED_MAPS if SHARED_MAPS.is_dir() else None
+
+
+@pytest.fixture(scope="module")
+def client_ns():
+    """The network namespace holding this process's djitellopy sockets (Tello tests)."""
+    import logging
+
+    from djitellopy import Tello
+
+    from quadnav.hardware.emulator import djitellopy_namespace
+
+    Tello.LOGGER.setLevel(logging.WARNING)
+    namespace = djitellopy_namespace()
+    yield namespace
+    namespace.close()

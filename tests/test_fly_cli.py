@@ -151,3 +151,16 @@ def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):
 
     with pytest.raises(QuadnavError, match="not a quadnav fly output folder"):
         read_run(tmp_path)
+
+
+def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(tmp_path):
+    results = {}
+    for name, extra in (("calm", []), ("windy", ["--wind", "0.03", "0", "0", "--gusts", "0.01"])):
+        out = tmp_path / name
+        assert run("fly", SMALL, *extra, "-o", out, "--quiet", "--no-figures").returncode == 0
+        results[name] = json.loads((out / "metrics.json").read_text())
+    assert results["windy"]["success"]
+    assert results["windy"]["rms_tracking_error_m"] > 2 * results["calm"]["rms_tracking_error_m"]
+    parameters = json.loads((tmp_path / "windy/parameters.json").read_text())
+    assert parameters["simulation"]["wind"] == [0.03, 0.0, 0.0]
+    assert parameters["simulation"]["gust_std"] == 0.01

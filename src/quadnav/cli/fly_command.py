@@ -10,6 +10,7 @@ from quadnav.cli.args import (
     add_margin_argument,
     add_planner_arguments,
     add_start_goal_arguments,
+    finite_float,
     output_folder,
     positive_float,
     resolve_margin,
@@ -48,7 +49,8 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
         vehicle=vehicle,
         gains=load_gains(args.gains, vehicle.gains),
         sim=SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
-                        settle_time=args.settle, seed=args.seed),
+                        settle_time=args.settle, wind=args.wind, gust_std=args.gusts,
+                        seed=args.seed),
     )
 
 
@@ -147,6 +149,12 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--control-rate", type=positive_float, default=SimSettings.control_rate,
                    metavar="HZ", help="controller updates per second; the physics rate "
                                       "must be a whole multiple (default: 1000)")
+    p.add_argument("--wind", nargs=3, type=finite_float, default=[0.0, 0.0, 0.0],
+                   metavar=("FX", "FY", "FZ"),
+                   help="steady wind as a force on the vehicle, N, world frame (default: none)")
+    p.add_argument("--gusts", type=float, default=0.0, metavar="N",
+                   help="random gusts: standard deviation of a force per axis, N, redrawn "
+                        "every 0.2 s from the seed (default: 0)")
     p.add_argument("--settle", type=float, default=SimSettings.settle_time, metavar="S",
                    help="seconds flown after the trajectory ends (default: 2)")
     p.add_argument("--no-figures", action="store_true",

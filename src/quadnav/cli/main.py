@@ -20,6 +20,7 @@ from quadnav.cli.kino_command import add_kino_command
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.report_command import add_report_command
+from quadnav.cli.tello_command import add_tello_command
 from quadnav.cli.traj_command import add_traj_command
 from quadnav.cli.view_command import add_view_command
 from quadnav.cli.worlds_command import add_worlds_command
@@ -53,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_view_command(commands)
     add_kino_command(commands)
     add_worlds_command(commands)
+    add_tello_command(commands)
     return parser
 
 

@@ -1,0 +1,76 @@
+"""``quadnav tello``: the DJI Ryze Tello — an emulator on this computer, flights on the drone.
+
+Each subcommand is one ``add_*`` function in :data:`SUBCOMMANDS`; it registers its parser
+on the ``tello`` subparsers and sets ``handler`` (called with the parsed arguments, returns
+the exit code).
+
+* ``quadnav tello emulate`` — run a Tello SDK 2.0 emulator (:mod:`quadnav.hardware.emulator`)
+  in the foreground until Ctrl-C.
+* ``quadnav tello fly`` — plan, check and fly a mission on a Tello
+  (:mod:`quadnav.cli.tello_fly_command`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Callable
+
+from quadnav.cli.args import finite_float, positive_float
+from quadnav.cli.tello_fly_command import add_tello_fly_command
+from quadnav.hardware.sdk import DEFAULT_HOST
+
+
+def emulate(args: argparse.Namespace) -> int:
+    """Run the emulator until Ctrl-C (KeyboardInterrupt: exit 130 via the main entry)."""
+    from quadnav.hardware.emulator import TelloEmulator
+
+    with TelloEmulator(host=args.host, start=tuple(args.start), yaw=math.radians(args.yaw),
+                       time_scale=args.time_scale) as emulator:
+        print(f"Emulated Tello at {emulator.host} (UDP 8889, state to the client's 8890), "
+              f"start {tuple(args.start)} m, yaw {args.yaw:g} deg, time scale "
+              f"{args.time_scale:g}. Connect with djitellopy Tello(host={emulator.host!r}). "
+              "Ctrl-C to stop.", flush=True)
+        while True:
+            time.sleep(1.0)
+
+
+def add_emulate_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav tello emulate``."""
+    parser = subparsers.add_parser(
+        "emulate", help="run a Tello SDK 2.0 emulator for djitellopy until Ctrl-C",
+        description="Run a Tello SDK 2.0 emulator that the djitellopy client drives as if it "
+                    "were the drone: commands on UDP 8889 at HOST, state packets at 10 Hz to "
+                    "the client's port 8890, motion flown by quadnav's simulator in real time. "
+                    "The emulator lives in its own Linux network namespace joined to this one "
+                    "by a virtual Ethernet pair, so it needs root (or a user namespace: "
+                    "unshare -rn).")
+    parser.add_argument("--host", default=DEFAULT_HOST, metavar="IP",
+                        help=f"IPv4 address of the emulated drone (default: {DEFAULT_HOST}); "
+                             "this computer gets the other address of its /31 pair")
+    parser.add_argument("--start", nargs=3, type=finite_float, default=(0.0, 0.0, 0.0),
+                        metavar=("X", "Y", "Z"),
+                        help="world position of the drone on the ground before takeoff, m "
+                             "(default: 0 0 0)")
+    parser.add_argument("--yaw", type=finite_float, default=0.0, metavar="DEG",
+                        help="world heading of the drone's nose at power-on, degrees "
+                             "counter-clockwise from world x (default: 0)")
+    parser.add_argument("--time-scale", type=positive_float, default=1.0, metavar="K",
+                        help="emulated seconds per wall-clock second (default: 1, real time)")
+    parser.set_defaults(handler=emulate)
+
+
+#: The ``quadnav tello`` subcommands, in the order ``--help`` lists them.
+SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
+    add_emulate_command, add_tello_fly_command]
+
+
+def add_tello_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav tello`` and its subcommands (:data:`SUBCOMMANDS`)."""
+    tello = subparsers.add_parser(
+        "tello", help="DJI Ryze Tello: emulate one, or fly a plan on one",
+        description="Work with a DJI Ryze Tello through its SDK 2.0 (the djitellopy client).")
+    commands = tello.add_subparsers(dest="tello_command", metavar="SUBCOMMAND", required=True)
+    for add in SUBCOMMANDS:
+        add(commands)

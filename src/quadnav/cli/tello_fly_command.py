@@ -1,0 +1,151 @@
+"""``quadnav tello fly``: plan like ``quadnav fly``, check, and fly it on a Tello.
+
+Exit codes: 0 landed at the goal (or a dry run printed); 1 no path, a safe stop (lost
+link, refused command, geofence) or a refused takeoff (low battery); 2 bad input,
+including a plan that would leave the geofence; 130 Ctrl-C (after the safe stop).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ipaddress
+import math
+import sys
+
+from quadnav.cli.args import (
+    add_map_argument,
+    add_margin_argument,
+    add_planner_arguments,
+    add_start_goal_arguments,
+    finite_float,
+    output_folder,
+    positive_float,
+    resolve_margin,
+    resolve_start_goal,
+)
+from quadnav.cli.progress import planning_bar
+from quadnav.hardware.bridge import (
+    MIN_BATTERY,
+    MODES,
+    TRACK_FIGURE,
+    BridgeSettings,
+    Status,
+    fly,
+)
+from quadnav.hardware.flight_plan import TRACKING_ALLOWANCE, NoPathError, plan_flight
+from quadnav.hardware.link import TELLO_IP
+from quadnav.hardware.rc import RC_FULL_SPEED
+from quadnav.hardware.tello_log import LOG_NAME
+from quadnav.mission import DEFAULT_ITERATIONS, DEFAULT_TIME_CAP
+from quadnav.planning import PlannerSettings, get_planner
+from quadnav.trajectory.generate import TrajectorySettings
+from quadnav.world import load_world
+
+#: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
+DEFAULT_SPEED = 0.5
+DEFAULT_ACCELERATION = 1.0
+#: Exit codes besides 0.
+EXIT_FAILED = 1
+EXIT_INTERRUPTED = 130
+_EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.STOPPED: EXIT_FAILED,
+               Status.REFUSED: EXIT_FAILED, Status.INTERRUPTED: EXIT_INTERRUPTED}
+
+
+def tello_speed(text: str) -> float:
+    """argparse type: a cruise speed in m/s, > 0 and at most the Tello's 1 m/s."""
+    value = positive_float(text)
+    if value > RC_FULL_SPEED:
+        raise argparse.ArgumentTypeError(f"expected at most {RC_FULL_SPEED:g} m/s (the "
+                                         f"Tello's go and rc limit), got {text!r}")
+    return value
+
+
+def ipv4(text: str) -> str:
+    """argparse type: an IPv4 address."""
+    try:
+        return str(ipaddress.IPv4Address(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an IPv4 address, got {text!r}") from None
+
+
+def percent(text: str) -> int:
+    """argparse type: a whole percentage, 0..100."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole percentage, got {text!r}") from None
+    if not 0 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"expected 0..100 percent, got {text!r}")
+    return value
+
+
+def tello_fly(args: argparse.Namespace) -> int:
+    """Plan, check and fly (or print) the mission; the exit code says how it ended."""
+    get_planner(args.planner)
+    settings = BridgeSettings(mode=args.mode, min_battery=args.min_battery,
+                              time_scale=args.time_scale)
+    folder = output_folder(args.output)
+    world = load_world(args.map)
+    start, goal = resolve_start_goal(args, world)
+    try:
+        with planning_bar(f"plan ({args.planner})", args.quiet) as progress:
+            plan = plan_flight(
+                world, start, goal, resolve_margin(args, world), math.radians(args.yaw),
+                args.planner,
+                PlannerSettings(seed=args.seed, max_iterations=args.iterations or None,
+                                time_limit=args.time),
+                TrajectorySettings(v_max=args.speed, a_max=args.accel), progress)
+    except NoPathError as error:
+        print(f"quadnav: tello: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    outcome, _ = fly(plan, settings, folder, host=None if args.dry_run else args.host)
+    stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
+    print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
+    print(f"wrote {folder / LOG_NAME}, {folder / TRACK_FIGURE}")
+    return _EXIT_CODES[outcome.status]
+
+
+def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav tello fly``."""
+    p = subparsers.add_parser(
+        "fly", help="plan a flight as 'quadnav fly' does and fly it on a Tello",
+        description="Plan a path through MAP as 'quadnav fly' does, with the margin plus "
+                    f"{TRACKING_ALLOWANCE:g} m; check every move against the geofence (the "
+                    "map shrunk by the margin); then take off from the floor under the "
+                    "start (the drone facing --yaw), fly it with 'go' moves (waypoints) or "
+                    "'rc' sticks following the trajectory (rc), and land on the floor under "
+                    "the goal. Below --min-battery the takeoff is refused; a lost link (no "
+                    "reply or state for 1 s), a refused command or Ctrl-C stop the drone "
+                    f"and land it. Writes DIR/{LOG_NAME} (every command, reply and state "
+                    f"packet) and DIR/{TRACK_FIGURE} (planned against flown). Exit 0 when "
+                    "landed at the goal, 1 on a safe stop, a refused takeoff or no path, 2 "
+                    "on bad input, 130 on Ctrl-C.")
+    add_map_argument(p)
+    add_start_goal_arguments(p)
+    add_margin_argument(p)
+    p.add_argument("--mode", choices=MODES, default="waypoints",
+                   help="'go' moves through the path's corners, or 'rc' sticks at 20 Hz "
+                        "following the trajectory (default: waypoints)")
+    p.add_argument("--yaw", type=finite_float, default=0.0, metavar="DEG",
+                   help="map heading the drone faces on the floor, degrees counter-clockwise "
+                        "from +x (default: 0, facing +x)")
+    p.add_argument("--speed", type=tello_speed, default=DEFAULT_SPEED, metavar="V",
+                   help=f"cruise speed, m/s, at most {RC_FULL_SPEED:g} "
+                        f"(default: {DEFAULT_SPEED:g})")
+    p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
+                   help=f"largest acceleration of the trajectory, m/s^2 "
+                        f"(default: {DEFAULT_ACCELERATION:g})")
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=DEFAULT_ITERATIONS)
+    p.add_argument("--dry-run", action="store_true",
+                   help="print every command instead of sending it (needs no drone)")
+    p.add_argument("--host", type=ipv4, default=TELLO_IP, metavar="IP",
+                   help=f"the drone's address (default: {TELLO_IP}, the Tello's own Wi-Fi)")
+    p.add_argument("--min-battery", type=percent, default=MIN_BATTERY, metavar="PCT",
+                   help=f"refuse to take off below this battery (default: {MIN_BATTERY} %%)")
+    p.add_argument("--time-scale", type=positive_float, default=1.0, metavar="K",
+                   help="drone seconds per wall-clock second: 1 for a real drone, the "
+                        "emulator's --time-scale for an emulated one (default: 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-o", "--output", default="tello_flight", metavar="DIR",
+                   help="folder to write into, created if needed (default: tello_flight)")
+    p.set_defaults(handler=tello_fly)

@@ -1,0 +1,1 @@
+"""Flying real hardware: the DJI Tello bridge and its emulator."""

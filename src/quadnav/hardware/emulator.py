@@ -1,0 +1,461 @@
+"""A DJI Tello (SDK 2.0) emulator that the real djitellopy client drives: :class:`TelloEmulator`.
+
+The emulated drone answers on UDP port 8889 of its own address (``host``) and sends state
+packets ten times a second to port 8890 of the client that sent ``command``, exactly as
+the firmware does, so djitellopy 2.5 drives it unmodified: ``Tello(host=emulator.host)``.
+Its flight is quadnav's simulator (:mod:`quadnav.hardware.emulated_drone`) in real time,
+or ``time_scale`` times faster: a motion's ``ok`` comes only once the motion is over.
+
+Protocol (:mod:`quadnav.hardware.sdk`): nothing is answered and no state is sent before
+``command``; every SDK 2.0 command djitellopy sends is understood, with the SDK's
+argument ranges (``out of range`` otherwise). Motions (``takeoff``, ``land``, ``go``,
+``curve``, ``up`` ... ``back``, ``cw``/``ccw``, ``flip``) need the drone flying and not
+already busy (``error Motor stop``, ``error Busy``); ``stop`` and ``emergency`` end a
+motion at once (its reply is then ``error Stopped``); ``rc`` steers a flying drone that
+is not busy; read commands are answered at once, even during a motion. ``speed`` sets
+the speed of ``up`` ... ``back`` (default :data:`DEFAULT_SPEED_CM_S`). Video
+(``streamon``), Wi-Fi, port and mission-pad settings are accepted and have no effect;
+mission-pad motions answer ``error Not valid marker``. Below
+:data:`~quadnav.hardware.emulated_drone.LOW_BATTERY` percent the drone will not take off
+(``error Low battery``) and lands by itself; with no command for
+:data:`AUTO_LAND_AFTER` emulated seconds while flying (a motion in progress does not
+count), it lands by itself too. Flips need half the battery and are not flown (the
+drone hovers for a second).
+
+Network: the emulator runs in its own Linux network namespace, joined to the client's by
+a virtual Ethernet pair (:mod:`quadnav.hardware.netns`, which explains why). The client's
+end gets :func:`~quadnav.hardware.netns.peer_address` of ``host``. Needs root (or
+``unshare -rn``) and iproute2.
+
+Faults for tests (:class:`Faults`): replies dropped with a probability, every reply
+late, the link dead both ways after some seconds, a low battery. Network faults are in
+wall-clock seconds (the client's clock); flight, battery and the auto-land timer in
+emulated seconds.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ipaddress
+import math
+import socket
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from quadnav.config import require
+from quadnav.errors import QuadnavError
+from quadnav.hardware import sdk
+from quadnav.hardware.emulated_drone import FLIP_TIME, EmulatedDrone
+from quadnav.hardware.netns import Link, NetNamespace
+from quadnav.hardware.sdk import COMMAND_PORT, DEFAULT_HOST, OK, STATE_PORT, Command, SdkError
+from quadnav.vehicle.params import FloatArray
+
+#: Emulated seconds without a command after which a flying drone lands by itself.
+AUTO_LAND_AFTER = 15.0
+#: Speed of ``up`` ... ``back`` until ``speed`` sets another, cm/s.
+DEFAULT_SPEED_CM_S = 100
+#: Wall-clock seconds between state packets (10 Hz).
+STATE_PERIOD = 0.1
+#: Wall-clock seconds between steps of the emulator's clock; a step never advances the
+#: flight by more than :data:`MAX_STEP` wall seconds (the emulator falls behind instead).
+TICK = 0.01
+MAX_STEP = 0.25
+#: Replies of refused motions (none contains "ok", which djitellopy takes for success).
+BUSY = "error Busy"
+NOT_FLYING = "error Motor stop"
+ALREADY_FLYING = "error Already flying"
+AUTO_LANDING = "error Auto land"
+LOW_BATTERY_REPLY = "error Low battery"
+STOPPED = "error Stopped"
+#: Battery needed for a flip, percent.
+FLIP_BATTERY = 50
+#: ``up`` ... ``back`` as unit steps in the heading frame (x forward, y left, z up).
+_DIRECTIONS = {"up": (0, 0, 1), "down": (0, 0, -1), "left": (0, 1, 0), "right": (0, -1, 0),
+               "forward": (1, 0, 0), "back": (-1, 0, 0)}
+#: Commands accepted with no effect.
+_NO_EFFECT = frozenset({"keepalive", "motoron", "motoroff", "throwfly", "streamon",
+                        "streamoff", "mdirection", "wifi", "ap", "port", "setfps",
+                        "setbitrate", "setresolution", "downvision"})
+
+
+@dataclass(frozen=True)
+class Faults:
+    """Faults the emulator injects, for testing a client's error handling.
+
+    Attributes:
+        drop_replies: probability that a reply is lost, in [0, 1] (drawn from the
+            emulator's seed); state packets still arrive.
+        reply_delay_s: wall-clock seconds every reply is held back before it is sent.
+        dead_after_s: wall-clock seconds after ``command`` at which the link dies both
+            ways for good (no replies, no state, commands lost), or None. The drone then
+            lands by itself :data:`AUTO_LAND_AFTER` emulated seconds after the last
+            command it heard.
+        battery: battery at power-on, percent (below
+            :data:`~quadnav.hardware.emulated_drone.LOW_BATTERY`: too low to fly).
+    """
+
+    drop_replies: float = 0.0
+    reply_delay_s: float = 0.0
+    dead_after_s: float | None = None
+    battery: float = 100.0
+
+    def __post_init__(self) -> None:
+        require([
+            (0 <= self.drop_replies <= 1,
+             f"Tello emulator fault drop_replies {self.drop_replies}: expected 0 to 1"),
+            (math.isfinite(self.reply_delay_s) and self.reply_delay_s >= 0,
+             f"Tello emulator fault reply_delay_s {self.reply_delay_s}: expected >= 0 s"),
+            (self.dead_after_s is None or (math.isfinite(self.dead_after_s)
+                                           and self.dead_after_s >= 0),
+             f"Tello emulator fault dead_after_s {self.dead_after_s}: expected None or "
+             ">= 0 s"),
+            (0 <= self.battery <= 100,
+             f"Tello emulator fault battery {self.battery}: expected 0 to 100 percent")])
+
+
+def check_host(host: str) -> str:
+    """``host`` if it is a unicast IPv4 address an emulated drone can have (not loopback,
+    multicast or unspecified), else QuadnavError."""
+    try:
+        address = ipaddress.IPv4Address(host)
+    except ValueError:
+        raise QuadnavError(f"Tello emulator host {host!r}: expected an IPv4 address such as "
+                           f"{DEFAULT_HOST}") from None
+    if address.is_loopback or address.is_multicast or address.is_unspecified:
+        raise QuadnavError(f"Tello emulator host {host}: expected a unicast address outside "
+                           f"127.0.0.0/8, e.g. {DEFAULT_HOST}")
+    return str(address)
+
+
+def djitellopy_namespace() -> NetNamespace:
+    """The network namespace of this process's djitellopy sockets.
+
+    djitellopy keeps one command socket (UDP 8889) and one state socket (8890) per
+    process, bound by the first ``Tello()`` and kept until the process ends. If it has
+    not bound them yet, they are bound now in a fresh namespace of their own, where
+    they clash with no other process's djitellopy (e.g. a parallel test worker). Pass
+    the result as ``client_netns`` to emulators used by this process's djitellopy.
+    """
+    from djitellopy import tello
+
+    if not tello.threads_initialized:
+        private = NetNamespace.create()
+        try:
+            private.call(lambda: tello.Tello(host=DEFAULT_HOST).end())
+        finally:
+            private.close()
+    return NetNamespace.of_socket(tello.client_socket)
+
+
+class TelloEmulator:
+    """An emulated Tello on a network link of its own; use it as a context manager.
+
+    Args:
+        host: the drone's IPv4 address (see :func:`check_host`).
+        start: (3,) world position on the floor before takeoff, m.
+        yaw: world heading of the nose at power-on, rad counter-clockwise from +x.
+        time_scale: emulated seconds per wall-clock second (> 0): motions, the battery,
+            the flight time and the auto-land timer run this much faster.
+        faults: injected faults (default: none).
+        seed: seed of the dropped replies.
+        client_netns: the network namespace of the client (default: the caller's). For
+            djitellopy in this process, :func:`djitellopy_namespace`.
+    """
+
+    def __init__(self, host: str = DEFAULT_HOST, start: Sequence[float] = (0.0, 0.0, 0.0),
+                 yaw: float = 0.0, time_scale: float = 1.0, faults: Faults | None = None,
+                 seed: int = 0, client_netns: NetNamespace | None = None) -> None:
+        if not (math.isfinite(time_scale) and time_scale > 0):
+            raise QuadnavError(f"Tello emulator time scale {time_scale}: expected a number > 0")
+        start_point = np.asarray(start, dtype=np.float64)
+        if start_point.shape != (3,) or not np.all(np.isfinite(start_point)):
+            raise QuadnavError(f"Tello emulator start {start!r}: expected 3 finite numbers, m")
+        self.host = check_host(host)
+        self.time_scale = float(time_scale)
+        self.faults = faults or Faults()
+        self._drone = EmulatedDrone(start_point, yaw, battery=self.faults.battery)
+        self._rng = np.random.default_rng(seed)
+        self._client_netns = client_netns
+        self._lock = threading.Lock()
+        self._stopping = threading.Event()
+        self._received: list[tuple[float, str]] = []
+        self._outbox: list[tuple[float, str, tuple[str, int]]] = []
+        self._client: tuple[str, int] | None = None
+        self._connected_at: float | None = None
+        self._pending: tuple[str, int] | None = None
+        self._auto_landing = False
+        self._mission_pads = False
+        self._speed = DEFAULT_SPEED_CM_S
+        self._last_command = 0.0
+        self._serial = f"0TQEMU{seed % 10**8:08d}"
+        self._threads: list[threading.Thread] = []
+        self._namespaces: list[NetNamespace] = []
+        self._link: Link | None = None
+        self._socket: socket.socket | None = None
+
+    # --- life cycle ----------------------------------------------------------------
+
+    def start(self) -> TelloEmulator:
+        """Make the network link and the socket, and start the emulator's threads."""
+        _warm_up()
+        try:
+            drone_ns = NetNamespace.create()
+            self._namespaces.append(drone_ns)
+            client_ns = self._client_netns
+            if client_ns is None:
+                client_ns = NetNamespace.current()
+                self._namespaces.append(client_ns)
+            self._link = Link(client_ns, drone_ns, self.host)
+            self._socket = drone_ns.call(
+                lambda: socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+            self._socket.bind(("0.0.0.0", COMMAND_PORT))
+            self._socket.settimeout(TICK)
+        except BaseException:
+            self.stop()
+            raise
+        for target, name in ((self._receive, "receiver"), (self._run, "clock")):
+            thread = threading.Thread(target=target, name=f"tello-emulator-{name}", daemon=True)
+            thread.start()
+            self._threads.append(thread)
+        return self
+
+    def stop(self) -> None:
+        """Stop the threads, close the socket and remove the link."""
+        self._stopping.set()
+        for thread in self._threads:
+            thread.join()
+        self._threads.clear()
+        if self._socket is not None:
+            self._socket.close()
+            self._socket = None
+        if self._link is not None:
+            self._link.close()
+            self._link = None
+        for namespace in self._namespaces:
+            namespace.close()
+        self._namespaces.clear()
+
+    def __enter__(self) -> TelloEmulator:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # --- what tests look at --------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Emulated seconds since the emulator was made."""
+        with self._lock:
+            return self._drone.time
+
+    def track(self) -> tuple[FloatArray, FloatArray]:
+        """The emulated flight so far: times (N,) emulated s and world positions (N, 3) m,
+        every :data:`~quadnav.hardware.emulated_drone.TRACK_PERIOD` s."""
+        with self._lock:
+            return self._drone.track()
+
+    def commands_received(self) -> list[tuple[float, str]]:
+        """Every datagram the drone heard: (emulated s, text), in order."""
+        with self._lock:
+            return list(self._received)
+
+    def flying(self) -> bool:
+        """Whether the motors are running."""
+        with self._lock:
+            return self._drone.flying
+
+    # --- threads -------------------------------------------------------------------
+
+    def _receive(self) -> None:
+        """Take datagrams and answer them, until stopped."""
+        assert self._socket is not None
+        while not self._stopping.is_set():
+            try:
+                data, address = self._socket.recvfrom(2048)
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            with self._lock:
+                if not self._link_dead():
+                    self._handle(data.decode("utf-8", errors="replace").strip(), address)
+
+    def _run(self) -> None:
+        """The emulator's clock: fly, finish motions, land by itself, send due replies
+        and state packets, every :data:`TICK` s until stopped."""
+        last = time.monotonic()
+        next_state = last
+        while not self._stopping.wait(TICK):
+            now = time.monotonic()
+            with self._lock:
+                ended = self._drone.advance(min(now - last, MAX_STEP) * self.time_scale)
+                last = now
+                self._after_step(ended)
+                self._flush(now)
+                if self._client is not None and now >= next_state:
+                    next_state = max(next_state + STATE_PERIOD, now)
+                    state = sdk.format_state(self._drone.telemetry(self._mission_pads))
+                    self._send(state, (self._client[0], STATE_PORT))
+
+    # --- protocol (called with the lock held) ---------------------------------------
+
+    def _handle(self, text: str, address: tuple[str, int]) -> None:
+        self._received.append((self._drone.time, text))
+        self._last_command = self._drone.time
+        if self._client is None and text != "command":
+            return  # not in SDK mode yet: the firmware ignores it
+        try:
+            command = sdk.parse_command(text)
+        except SdkError as error:
+            if not sdk.SILENT.intersection(text.split()[:1]):
+                self._reply(error.reply, address)
+            return
+        if command.name == "command":
+            self._client = address
+            if self._connected_at is None:
+                self._connected_at = time.monotonic()
+        reply = self._execute(command, address)
+        if reply is not None:
+            self._reply(reply, address)
+
+    def _execute(self, command: Command, address: tuple[str, int]) -> str | None:
+        """Carry out ``command``: the immediate reply, or None (none, or once the motion
+        is over)."""
+        name, args, drone = command.name, command.args, self._drone
+        if name.endswith("?"):
+            return sdk.query_reply(name, drone.telemetry(self._mission_pads), self._speed,
+                                   self._serial)
+        if name == "rc":
+            if drone.flying and not drone.busy:
+                drone.sticks(*args)
+            return None
+        if name == "emergency":
+            self._cancel()
+            drone.cut_motors()
+            return None
+        if name == "reboot":
+            if not drone.flying:
+                self._client = None
+            return None
+        if name == "stop":
+            if self._auto_landing:
+                return AUTO_LANDING
+            self._cancel()
+            drone.hold()
+            return OK
+        if name in ("mon", "moff"):
+            self._mission_pads = name == "mon"
+            return OK
+        if name == "speed":
+            self._speed = int(args[0])
+            return OK
+        if name in ("command", *_NO_EFFECT):
+            return OK
+        if command.mission_pad:
+            return sdk.NO_MARKER
+        refusal = self._refusal(name)
+        if refusal is not None:
+            return refusal
+        self._start_motion(name, args)
+        self._pending = address
+        return None
+
+    def _refusal(self, name: str) -> str | None:
+        """Why the motion ``name`` cannot start now, or None."""
+        drone = self._drone
+        if name == "takeoff":
+            if drone.flying or drone.busy:
+                return ALREADY_FLYING
+            return LOW_BATTERY_REPLY if drone.low_battery else None
+        if not drone.flying:
+            return NOT_FLYING
+        if self._auto_landing:
+            return AUTO_LANDING
+        if drone.busy:
+            return BUSY
+        if name == "flip" and drone.battery_percent < FLIP_BATTERY:
+            return LOW_BATTERY_REPLY
+        return None
+
+    def _start_motion(self, name: str, args: tuple[int | str, ...]) -> None:
+        drone = self._drone
+        if name == "takeoff":
+            drone.takeoff()
+        elif name == "land":
+            drone.land()
+        elif name in _DIRECTIONS:
+            drone.move(np.multiply(_DIRECTIONS[name], args[0]) / 100.0, self._speed / 100.0)
+        elif name in ("cw", "ccw"):
+            drone.turn(math.radians(args[0]) * (-1.0 if name == "cw" else 1.0))
+        elif name == "go":
+            drone.move(np.array(args[:3], dtype=float) / 100.0, args[3] / 100.0)
+        elif name == "curve":
+            points = np.array(args[:6], dtype=float).reshape(2, 3) / 100.0
+            drone.curve(points[0], points[1], args[6] / 100.0)
+        else:  # flip
+            drone.pause(FLIP_TIME)
+
+    def _cancel(self) -> None:
+        """End the motion in progress, if any: its reply is :data:`STOPPED`."""
+        if self._pending is not None:
+            self._reply(STOPPED, self._pending)
+            self._pending = None
+
+    def _after_step(self, ended: bool) -> None:
+        """Reply to a motion that is over, and land by itself when it must."""
+        drone = self._drone
+        if ended:
+            self._last_command = max(self._last_command, drone.time)
+            self._auto_landing = False
+        if self._pending is not None and not drone.busy:
+            self._reply(OK if ended else NOT_FLYING, self._pending)
+            self._pending = None
+        if drone.flying and not drone.busy and (
+                drone.low_battery
+                or drone.time - self._last_command >= AUTO_LAND_AFTER):
+            drone.land()
+            self._auto_landing = True
+
+    def _link_dead(self) -> bool:
+        dead_after = self.faults.dead_after_s
+        return (dead_after is not None and self._connected_at is not None
+                and time.monotonic() - self._connected_at >= dead_after)
+
+    def _reply(self, text: str, address: tuple[str, int]) -> None:
+        """Send a reply now or after the delay, unless it is dropped."""
+        if self.faults.drop_replies and self._rng.random() < self.faults.drop_replies:
+            return
+        if self.faults.reply_delay_s:
+            self._outbox.append((time.monotonic() + self.faults.reply_delay_s, text, address))
+        else:
+            self._send(text, address)
+
+    def _flush(self, now: float) -> None:
+        """Send the delayed replies that are due."""
+        due = [item for item in self._outbox if item[0] <= now]
+        self._outbox = [item for item in self._outbox if item[0] > now]
+        for _, text, address in due:
+            self._send(text, address)
+
+    def _send(self, text: str, address: tuple[str, int]) -> None:
+        if self._socket is None or self._link_dead():
+            return
+        with contextlib.suppress(OSError):  # no one there: a radio link loses it too
+            self._socket.sendto(text.encode("utf-8"), address)
+
+
+@cache
+def _warm_up() -> None:
+    """Compile (or load) the flight's compiled code before the clock runs, so the first
+    motion is not held up by the compiler."""
+    drone = EmulatedDrone((0.0, 0.0, 0.0))
+    drone.takeoff()
+    drone.advance(0.01)
+    drone.cut_motors()
+    drone.advance(0.01)

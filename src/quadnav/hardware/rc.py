@@ -1,0 +1,60 @@
+"""``rc`` mode's control law: a velocity from the trajectory and the estimate, as sticks.
+
+The SDK's ``rc a b c d`` sets four sticks, each a whole number in -100..100, a percentage
+of the full stick's speed :data:`RC_FULL_SPEED`: ``a`` right (+) / left, ``b`` forward
+(+) / back, ``c`` up (+) / down, ``d`` yaw clockwise (+) seen from above. They act in the
+drone's heading frame; the bridge never turns the drone, so that is the takeoff frame
+(x forward, y left, z up — hence ``a`` is *minus* the y velocity).
+
+The velocity asked for is the trajectory's plus a proportional correction towards the
+trajectory's position, capped at the full stick's speed. Rounding to whole percent is
+done with error diffusion (:class:`StickRounder`): what one command loses to rounding the
+next one gets, so the sticks' average is the velocity asked for, to within 1 % of
+:data:`RC_FULL_SPEED` over one period.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from quadnav.hardware.frames import FloatArray, IntArray, map_to_body
+
+#: Speed of a full stick (100), m/s (the Tello's default, slow, flight mode).
+RC_FULL_SPEED = 1.0
+#: Largest stick value.
+STICK_MAX = 100
+
+
+def tracking_velocity(position_ref: ArrayLike, velocity_ref: ArrayLike,
+                      position: ArrayLike, gain: float,
+                      limit: float = RC_FULL_SPEED) -> FloatArray:
+    """``velocity_ref + gain (position_ref - position)``, each (3,) in m, m/s and 1/s,
+    scaled down to a speed of at most ``limit`` m/s -> (3,) m/s."""
+    velocity = np.asarray(velocity_ref, dtype=np.float64) + gain * (
+        np.asarray(position_ref, dtype=np.float64) - np.asarray(position, dtype=np.float64))
+    speed = float(np.linalg.norm(velocity))
+    return velocity * (limit / speed) if speed > limit else velocity
+
+
+def stick_values(velocity: ArrayLike, yaw: float) -> FloatArray:
+    """A map-frame velocity (3,) m/s of a drone facing ``yaw`` rad as unrounded sticks
+    (right, forward, up) in percent of :data:`RC_FULL_SPEED`."""
+    forward, left, up = map_to_body(velocity, yaw)
+    return 100.0 / RC_FULL_SPEED * np.array([-left, forward, up])
+
+
+class StickRounder:
+    """Whole-percent sticks (right, forward, up) whose running sum follows the unrounded
+    ones' (error diffusion); the yaw stick is always 0."""
+
+    def __init__(self) -> None:
+        self._owed = np.zeros(3)
+
+    def __call__(self, values: ArrayLike) -> tuple[int, int, int, int]:
+        """The sticks (a, b, c, d) of the next ``rc`` command for unrounded ``values``."""
+        wanted = np.asarray(values, dtype=np.float64) + self._owed
+        sent: IntArray = np.clip(np.rint(wanted), -STICK_MAX, STICK_MAX).astype(np.int64)
+        self._owed = np.clip(wanted - sent, -1.0, 1.0)
+        right, forward, up = (int(v) for v in sent)
+        return right, forward, up, 0
