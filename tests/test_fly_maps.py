@@ -12,6 +12,7 @@ from publicmaps import MAPS, course_query
 from quadnav.errors import PlanningWarning
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
+from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 from quadnav.world.builtin import world_names
 
@@ -56,6 +57,18 @@ def test_map1_is_tracked_within_five_centimetres_rms_at_two_metres_per_second(sh
     _assert_clean_success(mission)
     assert top_speed == pytest.approx(2.0, rel=0.01)
     assert rms < 0.05
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_every_course_map_is_flown_at_three_metres_per_second_too(shared_maps, name):
+    world, start, goal, margin = course_query(shared_maps, name)
+    settings = MissionSettings(trajectory=TrajectorySettings(v_max=3.0, a_max=4.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlanningWarning)
+        mission = fly_mission(world, start, goal, margin, settings)
+    _assert_clean_success(mission)
+    print(f"{name} at 3 m/s: RMS tracking {100 * mission.flight.rms_tracking_error:.2f} cm")
+    assert mission.flight.rms_tracking_error < 0.05
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -62,7 +62,9 @@ class Limits:
     Attributes:
         speed_xy: largest horizontal velocity setpoint, m/s.
         speed_up: largest climb rate setpoint, m/s.
-        speed_down: largest descent rate setpoint, m/s.
+        speed_down: largest descent rate setpoint, m/s. These limits clip the whole
+            setpoint, the trajectory's feed-forward included, so they sit above the speeds
+            trajectories are made with.
         acceleration_xy: largest horizontal acceleration setpoint, m/s^2.
         tilt_max_deg: largest angle between the thrust and the vertical, degrees.
         thrust_min: smallest collective thrust, fraction of the rotors' total.
@@ -73,8 +75,8 @@ class Limits:
     """
 
     speed_xy: float = 8.0
-    speed_up: float = 3.0
-    speed_down: float = 2.0
+    speed_up: float = 5.0
+    speed_down: float = 5.0
     acceleration_xy: float = 12.0
     tilt_max_deg: float = 45.0
     thrust_min: float = 0.05
