@@ -32,6 +32,7 @@ from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
+from quadnav.trajectory.model import Samples
 from quadnav.vehicle.params import FloatArray
 from quadnav.world import World, read_map
 from quadnav.world.mapfile import format_map
@@ -117,18 +118,6 @@ class FlightTable:
 
 
 @dataclass(frozen=True, eq=False)
-class TrajectoryTable:
-    """trajectory.csv as arrays: t (N,) s, position, velocity, acceleration (N, 3),
-    yaw (N,) rad."""
-
-    t: FloatArray
-    position: FloatArray
-    velocity: FloatArray
-    acceleration: FloatArray
-    yaw: FloatArray
-
-
-@dataclass(frozen=True, eq=False)
 class Run:
     """A run folder read back.
 
@@ -151,7 +140,7 @@ class Run:
     tree_nodes: FloatArray
     tree_parents: np.ndarray
     path: FloatArray | None
-    trajectory: TrajectoryTable | None
+    trajectory: Samples | None
     flight: FlightTable | None
 
     def tree_edges(self) -> FloatArray:
@@ -199,7 +188,7 @@ def read_run(folder: str | Path) -> Run:
     if (folder / "flight.csv").is_file():
         path = _table(folder / "path.csv", "x,y,z")
         t = _table(folder / "trajectory.csv", CSV_HEADER)
-        trajectory = TrajectoryTable(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
+        trajectory = Samples(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
         f = _table(folder / "flight.csv", FLIGHT_HEADER)
         flight = FlightTable(f[:, 0], f[:, 1:4], f[:, 4:7], f[:, 7:11], f[:, 11:15],
                              f[:, 15:18])
