@@ -11,6 +11,7 @@ from quadnav.cli.args import (
     add_planner_arguments,
     add_start_goal_arguments,
     finite_float,
+    nonnegative_float,
     output_folder,
     positive_float,
     resolve_margin,
@@ -152,10 +153,10 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--wind", nargs=3, type=finite_float, default=[0.0, 0.0, 0.0],
                    metavar=("FX", "FY", "FZ"),
                    help="steady wind as a force on the vehicle, N, world frame (default: none)")
-    p.add_argument("--gusts", type=float, default=0.0, metavar="N",
+    p.add_argument("--gusts", type=nonnegative_float, default=0.0, metavar="N",
                    help="random gusts: standard deviation of a force per axis, N, redrawn "
                         "every 0.2 s from the seed (default: 0)")
-    p.add_argument("--settle", type=float, default=SimSettings.settle_time, metavar="S",
+    p.add_argument("--settle", type=nonnegative_float, default=SimSettings.settle_time, metavar="S",
                    help="seconds flown after the trajectory ends (default: 2)")
     p.add_argument("--no-figures", action="store_true",
                    help=f"skip the figures and {REPORT} (faster, e.g. for batches of "
