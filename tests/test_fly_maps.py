@@ -1,5 +1,5 @@
 """The main job end to end: every public course map with a path and every built-in world
-over 20 seeds are flown to the goal with no collision at 2 m/s cruise."""
+over 20 seeds are flown to the goal with no collision at a 2 m/s top speed (and at 3 m/s)."""
 
 from __future__ import annotations
 

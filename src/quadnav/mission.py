@@ -52,7 +52,7 @@ class MissionSettings:
         planner: planner name (``rrtstar`` or ``ompl:NAME``).
         planning: the planner's budget, seed and tuning.
         refine: shortcut and smooth the path before making the trajectory.
-        trajectory: generator and limits (``v_max`` is the cruise speed).
+        trajectory: generator and limits (``v_max`` is the top speed).
         vehicle: the simulated quadrotor.
         gains: the controller.
         sim: rates, stopping and success rules, disturbances, seed.

@@ -102,7 +102,7 @@ def _failure(mission: Mission) -> str:
 def _print_summary(mission: Mission) -> None:
     m = mission.metrics()
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
-          f"{m['seed']}, vehicle {m['vehicle']}, cruise {m['speed_m_s']:g} m/s")
+          f"{m['seed']}, vehicle {m['vehicle']}, top speed {m['speed_m_s']:g} m/s")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
         return
@@ -123,7 +123,7 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "fly", help="plan, smooth and fly a simulated quadrotor through a map (the main job)",
         description="The whole pipeline: plan a path with RRT* through MAP, shortcut and "
-                    "smooth it, make a minimum-snap trajectory at the cruise speed, and fly "
+                    "smooth it, make a minimum-snap trajectory within the top speed, and fly "
                     "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
@@ -134,7 +134,7 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     add_start_goal_arguments(p)
     add_margin_argument(p)
     p.add_argument("--speed", type=positive_float, default=DEFAULT_SPEED, metavar="V",
-                   help=f"cruise speed, m/s (default: {DEFAULT_SPEED:g})")
+                   help=f"top speed of the trajectory, m/s (default: {DEFAULT_SPEED:g})")
     p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
                    help=f"largest acceleration of the trajectory, m/s^2 "
                         f"(default: {DEFAULT_ACCELERATION:g})")

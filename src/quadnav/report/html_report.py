@@ -142,7 +142,7 @@ def _summary(run: Run) -> str:
     """The outcome and the headline numbers of a run, one line of HTML."""
     m = run.metrics
     parts = [f"{m['planner']} seed {m['seed']}", f"vehicle {m['vehicle']}",
-             f"cruise {m['speed_m_s']:g} m/s"]
+             f"top speed {m['speed_m_s']:g} m/s"]
     if run.flight is not None:
         clearance = m["min_clearance_m"]
         parts += [f"path {m['path_length_m']:.2f} m", f"flight {m['flight_time_s']:.2f} s",

@@ -84,7 +84,7 @@ def _draw_run(ax: Axes3D, run: Run) -> list:
 def flight_3d_figure(run: Run) -> Figure:
     """The map, the explored tree, the path (red, dashed), the trajectory and the flown
     track seen obliquely and from above, a cross where a collision stopped the flight;
-    the title gives the map, the outcome, the RMS tracking error and the cruise speed.
+    the title gives the map, the outcome, the RMS tracking error and the top speed.
     A run without a path shows the map and the tree."""
     metrics = run.metrics
     fig = plt.figure(figsize=(11, 5.5), dpi=120)
@@ -102,7 +102,7 @@ def flight_3d_figure(run: Run) -> Figure:
     summary = run_outcome(metrics)
     if run.flight is not None:
         summary += (f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm, "
-                    f"cruise speed {metrics['speed_m_s']:g} m/s")
+                    f"top speed {metrics['speed_m_s']:g} m/s")
     fig.suptitle(f"{metrics['map']}\n{summary}", fontsize=TITLE_FONT)
     fig.tight_layout()
     return fig

@@ -50,7 +50,7 @@ def thin_edges(edges: np.ndarray, limit: int = MAX_TREE_EDGES) -> np.ndarray:
 
 
 def _subtitle(metrics: dict) -> str:
-    """One line: the outcome, then the planner, vehicle, cruise speed, path length and flight
+    """One line: the outcome, then the planner, vehicle, top speed, path length and flight
     time that metrics.json gives (a missing one is left out)."""
     if metrics.get("success"):
         outcome = "success"
@@ -62,7 +62,7 @@ def _subtitle(metrics: dict) -> str:
         outcome = "FAILED: goal missed"
     parts = [outcome]
     for key, text in (("planner", "{}"), ("seed", "seed {}"), ("vehicle", "vehicle {}"),
-                      ("speed_m_s", "cruise {:g} m/s"), ("path_length_m", "path {:.2f} m"),
+                      ("speed_m_s", "top speed {:g} m/s"), ("path_length_m", "path {:.2f} m"),
                       ("flight_time_s", "flight {:.2f} s")):
         if metrics.get(key) is not None:
             parts.append(text.format(metrics[key]))
