@@ -33,12 +33,17 @@ def positive_float(text: str) -> float:
     return value
 
 
-def nonnegative_float(text: str) -> float:
-    """argparse type: a finite number >= 0."""
+def _at_least_zero(text: str, expected: str) -> float:
+    """A finite number >= 0 from ``text``; otherwise an error saying ``expected``."""
     value = finite_float(text)
     if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return value
+
+
+def nonnegative_float(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    return _at_least_zero(text, "a number >= 0")
 
 
 def natural(text: str) -> int:
@@ -70,10 +75,7 @@ def output_folder(path: str) -> Path:
 
 def margin_value(text: str) -> float:
     """argparse type: a margin in metres, >= 0."""
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a margin >= 0 m, got {text!r}")
-    return value
+    return _at_least_zero(text, "a margin >= 0 m")
 
 
 def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
