@@ -95,8 +95,9 @@ def line(ax, prefix: str):
 def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(mission, run,
                                                                            tmp_path):
     written = write_run(mission, tmp_path)
-    assert written[-len(FIGURES):] == list(FIGURES)
-    assert [name for name in written if not name.endswith(".png")] == [
+    assert written[-len(FIGURES) - 1:] == [*FIGURES, REPORT]
+    assert (tmp_path / REPORT).stat().st_size > 0
+    assert [name for name in written if not name.endswith((".png", ".html"))] == [
         "metrics.json", "parameters.json", "map.json", "tree.csv", "path.csv",
         "trajectory.csv", "flight.csv"]
     for name, make in figure_makers(run).items():
@@ -105,7 +106,7 @@ def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(missi
         assert fig.dpi == 120
         assert png_size(tmp_path / name) == expected
     (tmp_path / REPORT).write_text("an earlier run's report")
-    assert write_run(mission, tmp_path, figures=False) == written[:-len(FIGURES)]
+    assert write_run(mission, tmp_path, figures=False) == written[:-len(FIGURES) - 1]
     assert not any((tmp_path / name).exists() for name in (*FIGURES, REPORT))
 
 

@@ -81,12 +81,14 @@ def test_no_path_exits_1_with_metrics_only(tmp_path):
     out = tmp_path / "out"
     out.mkdir()
     (out / "flight.csv").write_text("stale")
+    (out / "view.html").write_text("stale")
     result = run("fly", SMALL, "--iterations", "1", "-o", out, "--quiet")
     assert result.returncode == 1
     assert "no path" in result.stderr
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["path_found"] is False and metrics["success"] is False
     assert not (out / "flight.csv").exists()
+    assert not (out / "view.html").exists()
 
 
 @pytest.mark.parametrize(("args", "fragments"), [

@@ -21,10 +21,9 @@ from PIL import Image
 from quadnav.cli.main import main
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
-from quadnav.report.rundir import read_run, write_run
+from quadnav.report.rundir import VIEW_PAGE, read_run, write_run
 from quadnav.viz.html_viewer import (
     MAX_TREE_EDGES,
-    VIEW_PAGE,
     viewer_data,
     viewer_html,
     write_viewer,

@@ -29,7 +29,7 @@ from quadnav.mission import (
     fly_problem,
 )
 from quadnav.planning import PlannerSettings, get_planner, make_problem
-from quadnav.report.rundir import FIGURES, REPORT, read_run, write_run
+from quadnav.report.rundir import FIGURES, REPORT, write_run
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
@@ -66,17 +66,7 @@ def fly(args: argparse.Namespace) -> int:
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
-    written = write_run(mission, folder, figures=not args.no_figures)
-    if not args.no_figures:
-        from quadnav.report.html_report import write_report
-
-        write_report([read_run(folder)], folder / REPORT)
-        written.append(REPORT)
-    if args.html:
-        from quadnav.viz.html_viewer import VIEW_PAGE, write_viewer
-
-        write_viewer(read_run(folder), folder / VIEW_PAGE)
-        written.append(VIEW_PAGE)
+    written = write_run(mission, folder, figures=not args.no_figures, html=args.html)
     _print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not mission.success:

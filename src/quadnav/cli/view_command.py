@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from quadnav.report.rundir import read_run
-from quadnav.viz.html_viewer import VIEW_PAGE, write_viewer
+from quadnav.report.rundir import VIEW_PAGE, read_run
+from quadnav.viz.html_viewer import write_viewer
 
 
 def view(args: argparse.Namespace) -> int:

@@ -41,20 +41,23 @@ from quadnav.world.mapfile import format_map
 TRAJECTORY_DT = 0.01
 #: Figures a run writes, in the order the report shows them.
 FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
-#: The HTML report ``quadnav fly`` writes after the other files (:mod:`.html_report`).
+#: The HTML report written with the figures (:mod:`.html_report`).
 REPORT = "report.html"
+#: The interactive page written on request (:mod:`quadnav.viz.html_viewer`).
+VIEW_PAGE = "view.html"
 #: Files written only when there is a path.
 FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
 TREE_HEADER = "x,y,z,parent"
 
 
-def write_run(mission: Mission, folder: Path, figures: bool = True) -> list[str]:
+def write_run(mission: Mission, folder: Path, figures: bool = True,
+              html: bool = False) -> list[str]:
     """Write the run folder of ``mission`` (created if needed); returns the names written.
 
-    The text files are written first; the figures are then drawn from the folder read
-    back (:func:`read_run`), as every other consumer draws them. Files of an earlier run
-    that this one does not write are removed (the report too: ``quadnav fly`` writes it
-    afterwards), so the folder never mixes two runs."""
+    The text files are written first; the folder is then read back once (:func:`read_run`)
+    and, with ``figures``, the figures and the report are drawn from it, as every other
+    consumer draws them; with ``html``, the interactive page too. Files of an earlier run
+    that this one does not write are removed, so the folder never mixes two runs."""
     problem = mission.problem
     world = problem.world.replace(start=problem.start, goal=problem.goal,
                                   margin=problem.margin)
@@ -71,22 +74,32 @@ def write_run(mission: Mission, folder: Path, figures: bool = True) -> list[str]
         texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
         texts["flight.csv"] = flight_csv(mission.flight)
     folder.mkdir(parents=True, exist_ok=True)
-    for name in (*FLIGHT_FILES, *FIGURES, REPORT):
+    for name in (*FLIGHT_FILES, *FIGURES, REPORT, VIEW_PAGE):
         if name not in texts:
             (folder / name).unlink(missing_ok=True)
     for name, text in texts.items():
         with atomic_output(folder / name) as tmp:
             tmp.write_text(text, encoding="utf-8")
-    if not figures:
-        return list(texts)
-    from quadnav.viz.figures import save_figure
-    from quadnav.viz.flight_figures import figure_makers
-
+    written = list(texts)
+    if not (figures or html):
+        return written
     run = read_run(folder)
-    makers = figure_makers(run)
-    for name, make in makers.items():
-        save_figure(make(run), folder / name)
-    return [*texts, *makers]
+    if figures:
+        from quadnav.report.html_report import write_report
+        from quadnav.viz.figures import save_figure
+        from quadnav.viz.flight_figures import figure_makers
+
+        makers = figure_makers(run)
+        for name, make in makers.items():
+            save_figure(make(run), folder / name)
+        write_report([run], folder / REPORT)
+        written += [*makers, REPORT]
+    if html:
+        from quadnav.viz.html_viewer import write_viewer
+
+        write_viewer(run, folder / VIEW_PAGE)
+        written.append(VIEW_PAGE)
+    return written
 
 
 def _json(value) -> str:

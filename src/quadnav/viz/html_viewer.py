@@ -28,8 +28,6 @@ MAX_TREE_EDGES = 20_000
 DECIMALS = 3
 #: Decimals kept of the attitude quaternions.
 QUATERNION_DECIMALS = 4
-#: Name of the page in a run folder.
-VIEW_PAGE = "view.html"
 _ASSETS = resources.files("quadnav.viz") / "viewer"
 #: The places in template.html that the page fills in.
 _TOKEN = re.compile(r"\{\{(TITLE|VIEWER_JS|RUN_DATA)\}\}")
