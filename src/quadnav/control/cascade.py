@@ -115,6 +115,12 @@ def _filtered_rate(memory, at, previous_at, value, a, dt, alpha, started) -> flo
     return memory[at + a]
 
 
+@njit(cache=True, inline="always")
+def _smoothing(g: GainArrays, dt: float) -> float:
+    """Weight of a new sample in the first-order filters of the derivative terms."""
+    return dt / (dt + 1.0 / (2.0 * math.pi * g.derivative_cutoff))
+
+
 @njit(cache=True)
 def _thrust_vector(force: np.ndarray, v: VehicleArrays, g: GainArrays) -> None:
     """Limit the thrust vector ``force`` (3,) N in place: vertical part within the thrust
@@ -151,9 +157,8 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
     used) tracking ``reference`` (:data:`REFERENCE_SIZE`,), ``dt`` s after the last call.
     Updates ``memory`` in place."""
     started = memory[_STARTED] > 0.0
-    alpha = dt / (dt + 1.0 / (2.0 * math.pi * g.derivative_cutoff))
-    q = state[6:10]
-    r = quaternion.to_matrix(q)
+    alpha = _smoothing(g, dt)
+    r = quaternion.to_matrix(state[6:10])
 
     # 1. position -> velocity setpoint
     position_error = np.empty(3)
@@ -208,7 +213,8 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
     collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
 
     q_sp = _attitude_setpoint(force / magnitude, reference[9])
-    return attitude_control(memory, state, q_sp, collective, reference[10], g, v, dt)
+    return _inner_loops(memory, state, r, q_sp, collective, reference[10], g, v, dt, alpha,
+                        started)
 
 
 @njit(cache=True)
@@ -218,13 +224,17 @@ def attitude_control(memory: np.ndarray, state: np.ndarray, q_sp: np.ndarray,
     """The inner loops alone: motor commands (4,) in [0, 1] that turn the measured
     ``state`` (17,) to the attitude ``q_sp`` (4,) with ``collective`` thrust N along body
     z, plus a world yaw rate feed-forward ``yaw_rate`` rad/s. Updates ``memory``."""
-    started = memory[_STARTED] > 0.0
-    alpha = dt / (dt + 1.0 / (2.0 * math.pi * g.derivative_cutoff))
-    q = state[6:10]
-    r = quaternion.to_matrix(q)
+    return _inner_loops(memory, state, quaternion.to_matrix(state[6:10]), q_sp, collective,
+                        yaw_rate, g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
 
+
+@njit(cache=True)
+def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
+                 v: VehicleArrays, dt, alpha, started) -> np.ndarray:
+    """Steps 4-6 of the cascade (see :func:`attitude_control`), given the body-to-world
+    rotation ``r`` (3, 3) of ``state`` and the derivative filters' ``alpha``."""
     # 4. attitude -> body rate setpoint
-    q_error = quaternion.multiply(quaternion.conjugate(q), q_sp)
+    q_error = quaternion.multiply(quaternion.conjugate(state[6:10]), q_sp)
     sign = 1.0 if q_error[0] >= 0.0 else -1.0
 
     # 5. body rate -> torque

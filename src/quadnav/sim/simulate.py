@@ -85,6 +85,7 @@ def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
     references = reference_table(trajectory, dt, steps)
     forces, noise = _disturbances(settings, steps, dt)
     vehicle = vehicle_arrays(params)
+    gains_compiled = gain_arrays(gains)
     state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
     memory = new_memory()
@@ -110,7 +111,7 @@ def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
     while done < steps and code == loop.RUNNING:
         last = min(done + chunk, steps)
         code, ran = loop.fly_steps(
-            state, memory, done, last, references, vehicle, gain_arrays(gains),
+            state, memory, done, last, references, vehicle, gains_compiled,
             settings.substeps, dt, floor_z, forces, noise, settings.noisy, boundary,
             world_blocks, grid, every, record_states, record_commands, stats)
         done += ran
