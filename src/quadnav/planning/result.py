@@ -122,6 +122,11 @@ class PlanResult:
 
     def tree_edges(self) -> FloatArray:
         """(E, 2, 3) segments from each non-root vertex to its parent, for drawing."""
-        child = np.flatnonzero(self.tree_parents >= 0)
-        return np.stack([self.tree_nodes[child], self.tree_nodes[self.tree_parents[child]]],
-                        axis=1).reshape(-1, 2, 3)
+        return tree_edges(self.tree_nodes, self.tree_parents)
+
+
+def tree_edges(nodes: FloatArray, parents: IntArray) -> FloatArray:
+    """(E, 2, 3) segments from each vertex of ``nodes`` (N, 3), m, to its parent (row in
+    ``parents`` (N,), -1 for a root)."""
+    child = np.flatnonzero(parents >= 0)
+    return np.stack([nodes[child], nodes[parents[child]]], axis=1).reshape(-1, 2, 3)

@@ -30,6 +30,7 @@ from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
 from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
+from quadnav.planning.result import tree_edges
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
 from quadnav.trajectory.model import Samples
@@ -158,9 +159,7 @@ class Run:
 
     def tree_edges(self) -> FloatArray:
         """(E, 2, 3) segments from each non-root vertex to its parent."""
-        child = np.flatnonzero(self.tree_parents >= 0)
-        return np.stack([self.tree_nodes[child], self.tree_nodes[self.tree_parents[child]]],
-                        axis=1).reshape(-1, 2, 3)
+        return tree_edges(self.tree_nodes, self.tree_parents)
 
 
 def _table(path: Path, header: str) -> np.ndarray:

@@ -53,6 +53,7 @@ from quadnav.viz.style import (
     TRAJECTORY_COLOR,
     TREE_COLOR,
 )
+from quadnav.viz.thinning import evenly_spread
 
 #: The cameras a render can be taken from, named by the image file's stem.
 CAMERAS = ("oblique", "top")
@@ -278,8 +279,7 @@ class _SceneBuilder:
     def plan(self) -> tuple[int, int]:
         """The tree, the path and the trajectory; returns the tree edges shown and in all."""
         edges = self.run.tree_edges()
-        shown = edges[np.linspace(0, len(edges) - 1, min(len(edges), MAX_TREE_EDGES))
-                      .astype(int)] if len(edges) else edges
+        shown = evenly_spread(edges, MAX_TREE_EDGES)
         if len(shown):
             self.curve("tree", shown, TREE_RADIUS * self.size,
                        self.material("tree", TREE_COLOR[:3]))

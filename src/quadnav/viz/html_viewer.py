@@ -20,6 +20,7 @@ import numpy as np
 
 from quadnav.files import atomic_output
 from quadnav.report.rundir import Run
+from quadnav.viz.thinning import evenly_spread
 
 #: Tree edges written into the page at most; a larger tree is thinned to an evenly spread
 #: subset, which keeps the page a few MB at most and drawing it interactive.
@@ -40,11 +41,6 @@ def _numbers(values: np.ndarray, decimals: int = DECIMALS) -> list[float]:
 
 def _point(value: np.ndarray | None) -> list[float] | None:
     return None if value is None else _numbers(value)
-
-
-def thin_edges(edges: np.ndarray, limit: int = MAX_TREE_EDGES) -> np.ndarray:
-    """At most ``limit`` of the segments ``edges`` (E, 2, 3), evenly spread over them."""
-    return edges[np.linspace(0, len(edges) - 1, min(len(edges), limit)).astype(int)]
 
 
 def _subtitle(metrics: dict) -> str:
@@ -80,7 +76,7 @@ def viewer_data(run: Run) -> dict:
         "colors": _numbers(world.colors),
         "start": _point(world.start),
         "goal": _point(world.goal),
-        "tree": _numbers(thin_edges(edges)),
+        "tree": _numbers(evenly_spread(edges, MAX_TREE_EDGES)),
         "treeEdges": len(edges),
         "path": _point(run.path),
         "trajectory": None,

@@ -17,6 +17,7 @@ from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor, exact_po
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.viz.map3d import draw_world
 from quadnav.viz.style import PATH_COLOR, TREE_COLOR
+from quadnav.viz.thinning import evenly_spread
 from quadnav.world.model import World
 
 #: Chord segments drawn for the tree at most; a larger tree is thinned evenly.
@@ -56,9 +57,7 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
     handles = draw_world(ax, world, result.tree_states[0, :3], goal)
     children = np.flatnonzero(result.tree_parents >= 0)
     if children.size:
-        shown = children[np.linspace(0, children.size - 1,
-                                     min(children.size, MAX_TREE_SEGMENTS // TREE_PIECES)
-                                     ).astype(int)]
+        shown = evenly_spread(children, MAX_TREE_SEGMENTS // TREE_PIECES)
         points = _motions(model, result.tree_states[result.tree_parents[shown]],
                           result.tree_controls[shown], result.tree_durations[shown],
                           TREE_PIECES)

@@ -13,6 +13,7 @@ from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
 from quadnav.viz.map3d import draw_world
 from quadnav.viz.style import PATH_COLOR, TREE_COLOR
+from quadnav.viz.thinning import evenly_spread
 
 #: Tree edges drawn at most; a larger tree is thinned to an evenly spread subset.
 MAX_TREE_EDGES = 20_000
@@ -24,7 +25,7 @@ def draw_tree(ax: Axes3D, edges: np.ndarray) -> Line2D | None:
     the counts (None, and nothing drawn, for no edges)."""
     if not len(edges):
         return None
-    shown = edges[np.linspace(0, len(edges) - 1, min(len(edges), MAX_TREE_EDGES)).astype(int)]
+    shown = evenly_spread(edges, MAX_TREE_EDGES)
     ax.add_collection3d(Line3DCollection(shown, colors=[TREE_COLOR], linewidths=0.4, zorder=5))
     label = f"tree ({len(edges):,} edges" + (
         f", {len(shown):,} drawn)" if len(shown) < len(edges) else ")")
