@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+from enum import Enum
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -109,7 +110,7 @@ def as_plain(value: Any) -> Any:
         return value.tolist()
     if isinstance(value, np.generic):
         return value.item()
-    if hasattr(value, "value") and type(value).__module__ != "builtins":  # an Enum
+    if isinstance(value, Enum):
         return value.value
     return value
 
