@@ -2,6 +2,6 @@
 
 import sys
 
-from quadnav.cli.main import main
+from quadnav.cli.launch import main
 
 sys.exit(main())

@@ -2,7 +2,8 @@
 
 Exit codes: 0 success; 1 a flight or search that failed (see each command); 2 bad
 input (a malformed map, a bad flag, a point in a block), reported as one line on
-stderr with no traceback.
+stderr with no traceback; 128 + the signal number when stopped by Ctrl-C (130), SIGTERM
+(143) or SIGHUP (129) (see :mod:`quadnav.cli.launch`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from quadnav.cli.animate_command import add_animate_command
 from quadnav.cli.blender_command import add_blender_command
 from quadnav.cli.fly_command import add_fly_command
 from quadnav.cli.kino_command import add_kino_command
+from quadnav.cli.launch import report_interrupt
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.report_command import add_report_command
@@ -71,9 +73,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except QuadnavError as error:
         print(f"quadnav: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("quadnav: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as interrupt:
+        return report_interrupt(interrupt)
 
 
 if __name__ == "__main__":
