@@ -56,7 +56,7 @@ from quadnav.control.cascade import control, gain_arrays, new_memory
 from quadnav.control.gains import Gains
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import reference_table, simulate
-from quadnav.trajectory import Trajectory, TrajectorySettings, checking_world, make_trajectory
+from quadnav.trajectory import SafeSpace, Trajectory, TrajectorySettings, make_trajectory
 from quadnav.vehicle.dynamics import (
     STATE_SIZE,
     VehicleArrays,
@@ -84,8 +84,8 @@ TARGET = 200.0
 def forest_flight() -> tuple[World, Trajectory]:
     """The forest and the benchmark trajectory through :data:`WAYPOINTS`."""
     world = load_world("forest")
-    free_world, _ = checking_world(world, world.margin, WAYPOINTS)
-    return world, make_trajectory(WAYPOINTS, TrajectorySettings(v_max=V_MAX), free_world)
+    return world, make_trajectory(WAYPOINTS, TrajectorySettings(v_max=V_MAX),
+                                  SafeSpace(world, world.margin))
 
 
 def quadnav_run(trajectory: Trajectory, world: World) -> tuple[float, float, float]:

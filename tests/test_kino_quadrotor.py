@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-from quadnav.errors import QuadnavError
+from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic import KinoResult, KinoSettings
 from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.quadrotor import (
@@ -23,6 +23,7 @@ from quadnav.kinodynamic.quadrotor import (
     plan_quadrotor,
     replay,
 )
+from quadnav.planning import make_problem
 from quadnav.viz.figures import save_figure
 from quadnav.viz.kino3d import MAX_TREE_SEGMENTS, quadrotor_controls_figure, quadrotor_figure
 from quadnav.world import World, load_world
@@ -293,13 +294,35 @@ def test_budget_exhausted_is_an_unsolved_result(forest):
 
 @pytest.mark.parametrize(("start", "goal", "words"), [
     ((-1.0, 1.0, 1.0), None, r"start \(-1, 1, 1\): outside the boundary"),
-    ((1.0, 1.0, 0.1), None, r"start \(1, 1, 0.1\) is within 0.22 m"),
+    ((1.0, 1.0, 1.0), (1.0, 1.0, 1.0), r"start and goal are the same point \(1, 1, 1\)"),
     (None, (19.0, 19.0, 30.0), r"goal \(19, 19, 30\): outside the boundary"),
 ])
 def test_bad_start_or_goal_is_a_user_error(forest, start, goal, words):
     with pytest.raises(QuadnavError, match=words):
         plan_quadrotor(forest, forest.start if start is None else start,
                        forest.goal if goal is None else goal, SETTINGS)
+
+
+def test_a_start_in_the_margin_leaves_it_by_its_leg_as_for_every_planner(shared_maps):
+    world = load_world(shared_maps / "meam620" / "test_window.json")  # starts 0.1 m from walls
+    with pytest.warns(PlanningWarning, match=r"start \(0.1, -4.9, 0.2\) is inside the 0.32 m"):
+        problem = make_problem(world, world.start, world.goal, world.margin + CHORD_TOLERANCE)
+    result = plan_quadrotor(world, world.start, world.goal, SETTINGS, MODEL, world.margin)
+    assert result.solved, result.message
+    # The leg first: straight out at rest to rest, then the tree keeps the whole margin.
+    leg_end = problem.search_start
+    assert np.array_equal(result.states[0], [*world.start, 0, 0, 0])
+    assert np.allclose(result.states[2], [*leg_end, 0, 0, 0], atol=1e-12)
+    following = MODEL.propagate(result.states[:-1], result.controls, result.durations)
+    assert np.allclose(following, result.states[1:], rtol=0, atol=1e-12)
+    leg = exact_positions(result.states[:2], MODEL.acceleration(result.controls[:2]),
+                          np.linspace(0, 1, 50) * result.durations[:2, None])
+    offsets = leg.reshape(-1, 3) - world.start
+    direction = (leg_end - world.start) / np.linalg.norm(leg_end - world.start)
+    assert np.allclose(offsets - np.outer(offsets @ direction, direction), 0, atol=1e-12)
+    positions = exact_positions(result.states[2:-1], MODEL.acceleration(result.controls[2:]),
+                                np.linspace(0, 1, 50) * result.durations[2:, None])
+    assert world.inflate(world.margin).points_free(positions.reshape(-1, 3)).all()
 
 
 def test_start_in_a_block_is_a_user_error(forest):

@@ -166,5 +166,5 @@ def test_simplify_keeps_the_legs_out_of_the_margin():
 
 def test_simplify_rejects_a_path_for_another_query():
     problem = PROBLEMS["forest"]
-    with pytest.raises(ValueError, match="does not run from the problem's start to its goal"):
+    with pytest.raises(QuadnavError, match="does not begin with the problem's start leg"):
         simplify_ompl(problem, [problem.start, problem.start + 1.0])

@@ -47,7 +47,8 @@ def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):
     assert run("plan", "maze", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path).returncode == 0
     result = run("plan", "maze", "--iterations", "3", "--quiet", "-o", tmp_path)
     assert result.returncode == 1
-    assert "no path found in 3 iterations" in result.stderr
+    assert "the search stopped at its cap of 3 samples" in result.stderr
+    assert "raise --iterations" in result.stderr
     assert not (tmp_path / "path.csv").exists()
     assert json.loads((tmp_path / "plan.json").read_text())["solved"] is False
 
@@ -56,7 +57,7 @@ def test_start_in_the_margin_warns_and_plans(tmp_path, shared_maps):
     result = run("plan", shared_maps / "rbe595" / "map1.txt", "--start", "0", "-5", "0",
                  "--goal", "8", "18", "3", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path)
     assert result.returncode == 0, result.stderr
-    assert "warning: start (0, -5, 0) is inside the safety margin" in result.stderr
+    assert "warning: start (0, -5, 0) is inside the 0.2 m safety margin; only the straight" in result.stderr
     assert np.array_equal(read_path(tmp_path)[0], [0.0, -5.0, 0.0])
 
 

@@ -305,7 +305,7 @@ def test_refine_leaves_an_unsolved_result_alone():
 def test_refine_rejects_a_path_that_skips_the_legs():
     problem, result = margin_case()
     without_legs = result.replace(path=result.path[1:-1])
-    with pytest.raises(QuadnavError, match=r"does not pass through the problem's start \(0, 1, 1\)"):
+    with pytest.raises(QuadnavError, match=r"does not begin with the problem's start leg .* \(from \(0, 1, 1\)"):
         refine(problem, without_legs)
 
 

@@ -77,7 +77,17 @@ def test_every_path_is_free_and_exact_in_random_worlds(query):
     assert_valid_tree(problem, result)
 
 
-@pytest.mark.parametrize("spec", ["forest", "window", "maze", "empty"])
+def test_a_goal_in_sight_of_the_start_is_joined_at_once():
+    world = load_world("empty")
+    problem = make_problem(world, None, [1.05, 1.0, 1.0], world.margin)  # 5 cm away
+    result = plan(problem, PlannerSettings(seed=1, time_limit=10))
+    assert result.solved and result.stats.stopped_by == "direct"
+    assert result.stats.iterations == 0 and result.stats.seconds < 10
+    assert np.array_equal(result.path, [world.start, [1.05, 1.0, 1.0]])
+    assert result.message == "the goal is in sight of the start: joined directly"
+
+
+@pytest.mark.parametrize("spec", ["forest", "window", "maze"])
 def test_builtin_worlds_are_solved(spec):
     world = load_world(spec)
     problem = make_problem(world, None, None, world.margin)
@@ -127,7 +137,8 @@ def test_no_path_within_the_budget_is_a_clear_result():
     problem = make_problem(world, None, None, 0.2)
     result = plan(problem, PlannerSettings(seed=0, max_iterations=3, time_limit=60))
     assert not result.solved and result.path.shape == (0, 3)
-    assert "no path found in 3 iterations" in result.message
+    assert "the search stopped at its cap of 3 samples" in result.message
+    assert result.stats.stopped_by == "iterations"
     assert result.length == float("inf") and result.stats.time_to_first is None
 
 
@@ -141,10 +152,11 @@ def test_map1_from_the_course_is_solved(shared_maps):
 
 def test_start_on_the_boundary_leaves_the_margin_by_a_short_leg(shared_maps):
     world = load_world(shared_maps / "rbe595" / "map1.txt")
-    with pytest.warns(PlanningWarning, match=r"start \(0, -5, 0\) is inside the safety margin"):
+    with pytest.warns(PlanningWarning, match=r"start \(0, -5, 0\) is inside the 0.2 m safety margin; only the straight"):
         problem = make_problem(world, [0.0, -5.0, 0.0], [8, 18, 3], 0.2)
     assert problem.free_world.is_free(problem.search_start)
-    assert np.linalg.norm(problem.search_start - problem.start) < 0.35  # sqrt(3) * 0.2
+    # Straight out of the floor's and the wall's margins, 1 cm past them (sqrt(3) * 0.21).
+    assert np.linalg.norm(problem.search_start - problem.start) == pytest.approx(0.3637, abs=1e-4)
     result = plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60))
     assert_valid_path(problem, result)
     assert np.array_equal(result.path[1], problem.search_start)
@@ -154,7 +166,7 @@ def test_goal_near_a_block_leaves_the_margin_without_touching_the_block():
     world = World(boundary=BOUNDARY, blocks=np.array([[4.0, 0.0, 0.0, 6.0, 10.0, 3.0]]))
     with pytest.warns(PlanningWarning, match="goal"):
         problem = make_problem(world, [1.0, 5.0, 1.0], [6.1, 5.0, 1.0], 0.2)
-    assert problem.search_goal == pytest.approx([6.2, 5.0, 1.0], abs=1e-5)
+    assert problem.search_goal == pytest.approx([6.21, 5.0, 1.0], abs=1e-9)  # 1 cm past
     assert world.replace(boundary=BOUNDARY + np.repeat([-1.0, 1.0], 3)).segment_free(
         problem.goal, problem.search_goal)
     assert_valid_path(problem, plan(problem, PlannerSettings(seed=0, max_iterations=20000, time_limit=60)))

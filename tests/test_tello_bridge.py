@@ -291,7 +291,7 @@ def test_cli_dry_run_prints_every_command_and_sends_nothing(shared_maps, tmp_pat
     assert result.stderr == ""
     lines = result.stdout.splitlines()
     commands = lines[:lines.index("land") + 1]
-    assert commands[:3] == ["command", "takeoff", "go 0 0 -50 50"]  # down to 30 cm
+    assert commands[:3] == ["command", "takeoff", "go 0 0 -48 50"]  # down to 31.5 cm
     for command in commands[2:-1]:
         assert sdk.parse_command(command).name == "go"
     assert "dry run" in lines[-2] and "nothing was sent" in lines[-2]

@@ -45,7 +45,7 @@ def test_traj_bad_input_is_one_line_exit_2(tmp_path):
         assert_user_error(run("traj", *args, "-o", out), fragment)
     good = tmp_path / "good.csv"
     good.write_text("x,y,z\n1,1,1\n19,19,3\n")  # straight through the trees
-    assert_user_error(run("traj", "forest", "--path", good, "-o", out), "collides with the map")
+    assert_user_error(run("traj", "forest", "--path", good, "-o", out), "path segment 0 from (1, 1, 1) to (19, 19, 3) touches a block")
     good.write_text("x,y,z\n1,1,1\n1,2,1\n")
     assert_user_error(run("traj", "forest", "--path", good, "--method", "cubic", "--corridor",
                           "-o", out), "need method minsnap")

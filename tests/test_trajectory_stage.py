@@ -9,14 +9,10 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.trajectory.collision import first_collision
-from quadnav.trajectory.generate import (
-    METHODS,
-    TrajectorySettings,
-    checking_world,
-    make_trajectory,
-)
+from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
 from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.model import YawMode
+from quadnav.trajectory.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.timing import optimize_times, trapezoidal_times
 from quadnav.world import load_world
 
@@ -38,10 +34,10 @@ def contains_in_order(trajectory, points: np.ndarray) -> bool:
 @pytest.mark.parametrize("spec", ["forest", "window", "maze"])
 def test_every_method_is_free_and_passes_every_waypoint(spec, method):
     world, path = planned(spec)
-    free_world, kept = checking_world(world, 0.2, path)
-    assert kept == 0.2
-    trajectory = make_trajectory(path, TrajectorySettings(method=method), free_world)
-    assert first_collision(trajectory, free_world) is None
+    space = SafeSpace(world, 0.2)
+    trajectory = make_trajectory(path, TrajectorySettings(method=method), space)
+    assert first_collision(trajectory, space.inflated) is None
+    assert trajectory_margins(trajectory, world) >= (0.199, None)
     assert contains_in_order(trajectory, path)
     assert np.allclose(trajectory.position(trajectory.breaks), trajectory.waypoints, atol=1e-8)
     assert np.allclose(trajectory.velocity([0.0, trajectory.duration]), 0.0, atol=1e-9)
@@ -49,10 +45,10 @@ def test_every_method_is_free_and_passes_every_waypoint(spec, method):
 
 def test_corridor_qp_stays_free_and_within_the_limits():
     world, path = planned("forest")
-    free_world, _ = checking_world(world, 0.2, path)
+    space = SafeSpace(world, 0.2)
     settings = TrajectorySettings(corridor=True, v_max=1.0, a_max=1.5)
-    trajectory = make_trajectory(path, settings, free_world)
-    assert first_collision(trajectory, free_world) is None
+    trajectory = make_trajectory(path, settings, space)
+    assert first_collision(trajectory, space.inflated) is None
     assert contains_in_order(trajectory, path)
     t = np.linspace(0, trajectory.duration, 4000)
     assert np.linalg.norm(trajectory.velocity(t), axis=1).max() <= 1.0 + 0.05
@@ -86,16 +82,24 @@ def test_travel_yaw_faces_the_velocity():
     assert trajectory.yaw(0.0) == pytest.approx(np.arctan2(chord[1], chord[0]))
 
 
-def test_a_start_on_the_boundary_keeps_a_smaller_margin(shared_maps):
-    with pytest.warns(PlanningWarning, match=r"start \(0, -5, 0\) is inside the safety"):
+def test_only_the_leg_from_a_start_on_the_boundary_is_inside_the_margin(shared_maps):
+    with pytest.warns(PlanningWarning, match=r"start \(0, -5, 0\) is inside the 0.2 m safety"):
         world, path = planned(str(shared_maps / "rbe595" / "map1.txt"), [0.0, -5.0, 0.0],
                               [8.0, 18.0, 3.0])
-    with pytest.warns(PlanningWarning, match="the path comes within 0.000 m"):
-        free_world, kept = checking_world(world, 0.2, path)
-    assert kept < 1e-6
-    trajectory = make_trajectory(path, TrajectorySettings(), free_world)
+    space = SafeSpace(world, 0.2)
+    assert space.split(path) == (1, len(path) - 1)
+    trajectory = make_trajectory(path, TrajectorySettings(), space)
     assert np.array_equal(trajectory.position(0.0), [0.0, -5.0, 0.0])
-    assert first_collision(trajectory, free_world) is None
+    begin, end = trajectory.main_window
+    assert 0 < begin == trajectory.breaks[1] and end == trajectory.duration
+    # The leg is flown straight, from rest to rest, exactly along the path's first segment.
+    t = np.linspace(0.0, begin, 200)
+    along = trajectory.position(t) - path[0]
+    direction = (path[1] - path[0]) / np.linalg.norm(path[1] - path[0])
+    assert np.allclose(along - np.outer(along @ direction, direction), 0.0, atol=1e-12)
+    assert np.allclose(trajectory.velocity([0.0, begin]), 0.0, atol=1e-12)
+    kept, on_leg = trajectory_margins(trajectory, world)
+    assert kept >= 0.199 and on_leg == pytest.approx(0.0, abs=1e-12)
 
 
 def test_bad_settings_and_paths_are_user_errors():
@@ -109,8 +113,8 @@ def test_bad_settings_and_paths_are_user_errors():
     with pytest.raises(QuadnavError, match="at least 2 distinct waypoints"):
         make_trajectory([path[0], path[0]])
     through_trunk = np.array([world.start, world.blocks[0, :3] + 0.01, world.goal])
-    with pytest.raises(QuadnavError, match=r"path segment 0 .* collides with the map"):
-        checking_world(world, 0.2, through_trunk)
+    with pytest.raises(QuadnavError, match=r"path segment 0 from .* touches a block"):
+        make_trajectory(through_trunk, TrajectorySettings(), SafeSpace(world, 0.2))
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -1,43 +1,52 @@
 """The whole pipeline, World -> Path -> Trajectory -> Flight: :func:`fly_mission`.
 
 Plan with RRT* (or an OMPL planner), shortcut and smooth the path, make a
-minimum-snap trajectory that keeps the margin, and fly it in simulation against the real
+minimum-snap trajectory that keeps the margin everywhere but on the legs out of it,
+check that the vehicle can fly it, and fly it in simulation against the real
 (uninflated) map. :meth:`Mission.metrics` summarises the outcome for reports and
-``metrics.json``.
+``metrics.json``, with the margin kept on and off the legs measured exactly.
 """
 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
+from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
+from quadnav.planning.result import path_length
+from quadnav.sim.envelope import check_flyable
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
-from quadnav.trajectory.generate import TrajectorySettings, checking_world, make_trajectory
+from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import Trajectory
-from quadnav.vehicle.params import VehicleParams, load_params
+from quadnav.trajectory.space import SafeSpace, trajectory_margins
+from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
+from quadnav.world.margins import box_margins, rounded
 from quadnav.world.model import World
 
 #: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2.
 DEFAULT_SPEED = 2.0
 DEFAULT_ACCELERATION = 3.0
-#: Search budget of a mission: samples, and a wall-time cap in seconds. The sample
-#: count binds on the built-in worlds, so the same seed flies the same flight.
-DEFAULT_ITERATIONS = 50_000
+#: Search budget of a mission: samples of improvement after the first path, and a
+#: wall-time cap in seconds on the whole search. The first path takes as many samples as
+#: it needs, so the same seed flies the same flight unless the time cap ends the search.
+DEFAULT_IMPROVE = 50_000
 DEFAULT_TIME_CAP = 10.0
 
 
 def _default_planner() -> PlannerSettings:
-    return PlannerSettings(max_iterations=DEFAULT_ITERATIONS, time_limit=DEFAULT_TIME_CAP)
+    return PlannerSettings(improve_iterations=DEFAULT_IMPROVE, time_limit=DEFAULT_TIME_CAP)
 
 
 def _default_trajectory() -> TrajectorySettings:
@@ -76,8 +85,6 @@ class Mission:
         plan: the planner's result after refinement (``plan.solved`` False: no path).
         raw_length: path length before refinement, m (inf without a path).
         trajectory: the reference flown (None without a path).
-        margin_kept: clearance the trajectory was made to keep, m (below the margin when
-            a start or goal lies inside it).
         flight: the simulated flight (None without a path).
         timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``.
         settings: what the mission ran with.
@@ -87,7 +94,6 @@ class Mission:
     plan: PlanResult
     raw_length: float
     trajectory: Trajectory | None
-    margin_kept: float | None
     flight: Flight | None
     timings: dict[str, float]
     settings: MissionSettings
@@ -122,7 +128,8 @@ class Mission:
             "start": problem.start.tolist(),
             "goal": problem.goal.tolist(),
             "margin_m": problem.margin,
-            "margin_kept_m": self.margin_kept,
+            "start_leg_m": path_length(problem.start_leg),
+            "goal_leg_m": path_length(problem.goal_leg),
             "planner": self.plan.planner,
             "seed": self.plan.seed,
             "vehicle": self.settings.vehicle.name,
@@ -134,8 +141,22 @@ class Mission:
             "trajectory_time_s": self.timings.get("trajectory"),
             "trajectory_duration_s": self.trajectory.duration if self.trajectory else None,
         }
-        return out | (flight_metrics(flight, problem.world, self.settings.sim)
-                      if flight is not None else {"collision": False, "reached_goal": False})
+        if flight is None:
+            return out | {"collision": False, "reached_goal": False}
+        return out | self.margins | flight_metrics(flight, problem.world, self.settings.sim)
+
+    @cached_property
+    def margins(self) -> dict[str, float | None]:
+        """The margin (per axis, m) kept from the real blocks and the boundary, measured
+        exactly, by the trajectory and by the flight, off the legs and on them (None
+        without legs); empty without a flight."""
+        if self.trajectory is None or self.flight is None:
+            return {}
+        world, window = self.problem.world, self.trajectory.main_window
+        off, on = trajectory_margins(self.trajectory, world)
+        flown_off, flown_on = track_margins(self.flight.t, self.flight.position, world, window)
+        return {"trajectory_margin_m": off, "trajectory_leg_margin_m": on,
+                "flight_margin_m": flown_off, "flight_leg_margin_m": flown_on}
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
@@ -150,6 +171,21 @@ def min_clearance(flight: Flight, world: World) -> float | None:
         return None
     open_world = world.replace(boundary=world.boundary + np.repeat([-1e6, 1e6], 3))
     return float(open_world.clearances(flight.position).min())
+
+
+def track_margins(t: FloatArray, positions: FloatArray, world: World,
+                  window: tuple[float, float]) -> tuple[float, float | None]:
+    """The margin (per axis, m) a flown track keeps from the real blocks and boundary,
+    ``(within window, outside it)``, the second None when nothing was flown outside it.
+
+    The track is times ``t`` (N,) s and positions (N, 3) m; between two samples it is
+    taken as straight, and each such piece is measured by its bounding box."""
+    pieces = np.stack([positions[:-1], positions[1:]], axis=1)
+    margins = box_margins(world, np.concatenate([pieces.min(axis=1), pieces.max(axis=1)],
+                                                axis=1))
+    inside = (t[:-1] >= window[0]) & (t[1:] <= window[1])
+    off = rounded(margins[inside].min()) if inside.any() else float("inf")
+    return off, rounded(margins[~inside].min()) if (~inside).any() else None
 
 
 def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
@@ -205,6 +241,7 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     :func:`~quadnav.planning.make_problem` (so bad input fails before any work)."""
     settings = settings or MissionSettings()
     world = problem.world
+    warn_if_margin_too_small(problem.margin, settings.vehicle)
     began = time.perf_counter()
     result = plan(problem, settings.planning, settings.planner, planning_progress)
     raw_length = result.length
@@ -212,12 +249,24 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
         result = refine(problem, result)
     timings = {"planning": time.perf_counter() - began}
     if not result.solved:
-        return Mission(problem, result, raw_length, None, None, None, timings, settings)
+        return Mission(problem, result, raw_length, None, None, timings, settings)
     began = time.perf_counter()
-    free_world, kept = checking_world(world, problem.margin, result.path)
-    trajectory = make_trajectory(result.path, settings.trajectory, free_world)
+    trajectory = make_trajectory(result.path, settings.trajectory,
+                                 SafeSpace(world, problem.margin))
     timings["trajectory"] = time.perf_counter() - began
+    check_flyable(trajectory, settings.vehicle, settings.gains, settings.trajectory.v_max,
+                  settings.trajectory.a_max)
     flight = simulate(trajectory, settings.vehicle, settings.gains, world, settings.sim,
                       flight_progress)
     timings["simulation"] = flight.wall_time
-    return Mission(problem, result, raw_length, trajectory, kept, flight, timings, settings)
+    return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
+
+
+def warn_if_margin_too_small(margin: float, vehicle: VehicleParams) -> None:
+    """Warn when ``margin`` m is less than the half-diagonal of the vehicle's body box,
+    the most the body can reach past its centre however it turns."""
+    reach = 0.5 * float(np.linalg.norm(vehicle.body_size))
+    if margin < reach:
+        warnings.warn(f"the {margin:g} m margin cannot hold the {vehicle.name} vehicle's body "
+                      f"(it reaches {reach:.3g} m from its centre): a flight that keeps the "
+                      "margin may still touch a block", PlanningWarning, stacklevel=2)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import QuadnavError
-from quadnav.planning import planner_names
+from quadnav.planning import PlannerSettings, planner_names
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -127,14 +127,28 @@ def resolve_start_goal(args: argparse.Namespace, world: World
 
 
 
-def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iterations: int) -> None:
-    """--planner NAME, --time S, --seed N and --iterations N with the given defaults."""
+def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iterations: int,
+                          improve: int | None) -> None:
+    """--planner NAME, --time S, --seed N, --iterations N and --improve N with the given
+    defaults (``iterations`` 0: no cap; ``improve`` None: no limit)."""
     parser.add_argument("--planner", default="rrtstar", metavar="NAME",
                         help=f"one of {', '.join(planner_names())} (default: rrtstar)")
     parser.add_argument("--time", type=positive_float, default=time, metavar="S",
                         help=f"search time budget in seconds (default: {time:g})")
     parser.add_argument("--seed", type=natural, default=0, metavar="N",
                         help="random seed; the same seed gives the same result (default: 0)")
-    budget = f"{iterations:,} samples" if iterations else "the time budget only"
+    budget = f"{iterations:,} samples" if iterations else "no cap"
     parser.add_argument("--iterations", type=natural, default=iterations, metavar="N",
-                        help=f"stop after N samples as well; 0: no limit (default: {budget})")
+                        help=f"stop after N samples in all; 0: no cap (default: {budget})")
+    until = (f"{improve:,} samples after it" if improve is not None
+             else "until the time or iteration budget ends")
+    parser.add_argument("--improve", type=natural, default=improve, metavar="N",
+                        help="once a first path is found, improve it for N more samples, "
+                             "then stop (rrtstar; the same seed then gives the same path "
+                             f"however fast the machine; default: {until})")
+
+
+def planner_budget(args: argparse.Namespace) -> PlannerSettings:
+    """The search budget and seed from the flags of :func:`add_planner_arguments`."""
+    return PlannerSettings(time_limit=args.time, max_iterations=args.iterations or None,
+                           improve_iterations=args.improve, seed=args.seed)

@@ -13,6 +13,7 @@ from quadnav.cli.args import (
     finite_float,
     nonnegative_float,
     output_folder,
+    planner_budget,
     positive_float,
     resolve_margin,
     resolve_start_goal,
@@ -21,14 +22,14 @@ from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.gains import load_gains
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
-    DEFAULT_ITERATIONS,
+    DEFAULT_IMPROVE,
     DEFAULT_SPEED,
     DEFAULT_TIME_CAP,
     Mission,
     MissionSettings,
     fly_problem,
 )
-from quadnav.planning import PlannerSettings, get_planner, make_problem
+from quadnav.planning import get_planner, make_problem
 from quadnav.report.rundir import FIGURES, REPORT, write_run
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
@@ -44,8 +45,7 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
     vehicle = load_params(args.params)
     return MissionSettings(
         planner=args.planner,
-        planning=PlannerSettings(seed=args.seed, max_iterations=args.iterations or None,
-                                 time_limit=args.time),
+        planning=planner_budget(args),
         trajectory=TrajectorySettings(v_max=args.speed, a_max=args.accel),
         vehicle=vehicle,
         gains=load_gains(args.gains, vehicle.gains),
@@ -134,7 +134,7 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--gains", metavar="FILE",
                    help="controller gains TOML file; keys it leaves out keep the gains tuned "
                         "for the vehicle")
-    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=DEFAULT_ITERATIONS)
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
     p.add_argument("--physics-rate", type=positive_float, default=SimSettings.physics_rate,
                    metavar="HZ", help="RK4 steps per second (default: 1000)")
     p.add_argument("--control-rate", type=positive_float, default=SimSettings.control_rate,

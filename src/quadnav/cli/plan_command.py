@@ -12,6 +12,7 @@ from quadnav.cli.args import (
     add_planner_arguments,
     add_start_goal_arguments,
     output_folder,
+    planner_budget,
     positive_float,
     probability,
     resolve_margin,
@@ -20,6 +21,7 @@ from quadnav.cli.args import (
 from quadnav.cli.progress import planning_bar
 from quadnav.files import atomic_output
 from quadnav.planning import PlannerSettings, get_planner, make_problem
+from quadnav.planning import plan as run_planner
 from quadnav.planning.refine import refine
 from quadnav.planning.report import path_csv, plan_summary
 from quadnav.planning.settings import DEFAULT_TIME_LIMIT
@@ -31,9 +33,9 @@ EXIT_NO_PATH = 1
 
 def settings_from(args: argparse.Namespace) -> PlannerSettings:
     """Planner settings from the command-line flags."""
-    return PlannerSettings(time_limit=args.time, max_iterations=args.iterations or None,
-                           seed=args.seed, stop_at_first=args.first, step=args.step,
-                           goal_bias=args.goal_bias, goal_tolerance=args.goal_tolerance)
+    return planner_budget(args).replace(stop_at_first=args.first, step=args.step,
+                                        goal_bias=args.goal_bias,
+                                        goal_tolerance=args.goal_tolerance)
 
 
 def plan(args: argparse.Namespace) -> int:
@@ -41,14 +43,14 @@ def plan(args: argparse.Namespace) -> int:
     from quadnav.viz.figures import save_figure
     from quadnav.viz.plan_figure import plan_figure
 
-    planner = get_planner(args.planner)
+    get_planner(args.planner)
     folder = output_folder(args.output)
     settings = settings_from(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)
     problem = make_problem(world, start, goal, resolve_margin(args, world))
     with planning_bar(args.planner, args.quiet) as progress:
-        result = planner(problem, settings, progress)
+        result = run_planner(problem, settings, args.planner, progress)
     raw_length = result.length
     if not args.no_refine:
         result = refine(problem, result)
@@ -97,7 +99,7 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
-    add_planner_arguments(p, time=DEFAULT_TIME_LIMIT, iterations=0)
+    add_planner_arguments(p, time=DEFAULT_TIME_LIMIT, iterations=0, improve=None)
     p.add_argument("--first", action="store_true",
                    help="stop at the first solution instead of improving it")
     p.add_argument("--step", type=positive_float, metavar="M",

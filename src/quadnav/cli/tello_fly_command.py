@@ -19,6 +19,7 @@ from quadnav.cli.args import (
     add_start_goal_arguments,
     finite_float,
     output_folder,
+    planner_budget,
     positive_float,
     resolve_margin,
     resolve_start_goal,
@@ -36,8 +37,8 @@ from quadnav.hardware.flight_plan import TRACKING_ALLOWANCE, NoPathError, plan_f
 from quadnav.hardware.link import TELLO_IP
 from quadnav.hardware.rc import RC_FULL_SPEED
 from quadnav.hardware.tello_log import LOG_NAME
-from quadnav.mission import DEFAULT_ITERATIONS, DEFAULT_TIME_CAP
-from quadnav.planning import PlannerSettings, get_planner
+from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
+from quadnav.planning import get_planner
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
@@ -92,8 +93,7 @@ def tello_fly(args: argparse.Namespace) -> int:
             plan = plan_flight(
                 world, start, goal, resolve_margin(args, world), math.radians(args.yaw),
                 args.planner,
-                PlannerSettings(seed=args.seed, max_iterations=args.iterations or None,
-                                time_limit=args.time),
+                planner_budget(args),
                 TrajectorySettings(v_max=args.speed, a_max=args.accel), progress)
     except NoPathError as error:
         print(f"quadnav: tello: {error}", file=sys.stderr)
@@ -135,7 +135,7 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
                    help=f"largest acceleration of the trajectory, m/s^2 "
                         f"(default: {DEFAULT_ACCELERATION:g})")
-    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=DEFAULT_ITERATIONS)
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
     p.add_argument("--dry-run", action="store_true",
                    help="print every command instead of sending it (needs no drone)")
     p.add_argument("--host", type=ipv4, default=TELLO_IP, metavar="IP",

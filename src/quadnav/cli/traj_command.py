@@ -15,15 +15,10 @@ from quadnav.cli.args import (
 from quadnav.files import atomic_output
 from quadnav.trajectory.export import mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import Limits, feasibility
-from quadnav.trajectory.generate import (
-    METHODS,
-    TrajectorySettings,
-    checking_world,
-    make_trajectory,
-    with_boundary_slack,
-)
+from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.pathfile import read_path_csv
+from quadnav.trajectory.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.world import load_world
 
@@ -42,15 +37,16 @@ def traj(args: argparse.Namespace) -> int:
                                   yaw=YawMode(args.yaw))
     world = load_world(args.map)
     path = read_path_csv(args.path)
-    margin = resolve_margin(args, world)
-    free_world, kept = checking_world(world, margin, path)
-    trajectory = make_trajectory(path, settings, free_world)
+    space = SafeSpace(world, resolve_margin(args, world))
+    trajectory = make_trajectory(path, settings, space)
     # Clearance to the real blocks; a path may start on the boundary itself.
     limits = Limits(v_max=args.vmax, a_max=args.amax)
-    report = feasibility(trajectory, with_boundary_slack(world), limits, dt=args.dt)
+    report = feasibility(trajectory, space.legs_world, limits, dt=args.dt)
+    kept, kept_on_legs = trajectory_margins(trajectory, world)
     summary = {
         "map": world.name, "path": str(args.path), "method": trajectory.method,
-        "margin": margin, "margin_kept": kept, "duration": trajectory.duration,
+        "margin": space.margin, "margin_kept": kept, "margin_kept_on_legs": kept_on_legs,
+        "legs": list(trajectory.legs), "duration": trajectory.duration,
         "waypoints_in": len(path), "waypoints": len(trajectory.waypoints),
         "segment_times": trajectory.segment_times.tolist(), "yaw": settings.yaw.value,
         "info": trajectory.info, "feasibility": report.as_dict(),
@@ -66,6 +62,8 @@ def traj(args: argparse.Namespace) -> int:
     print(f"{world.name}: {trajectory.method} through {len(trajectory.waypoints)} waypoints "
           f"({len(path)} in the path), {trajectory.duration:.2f} s")
     print(report.summary())
+    print(f"  margin kept {kept:.3g} m (asked {space.margin:g} m)" + (
+        "" if kept_on_legs is None else f", {kept_on_legs:.3g} m on the legs out of it"))
     print("wrote " + ", ".join(str(folder / n) for n in (
         "trajectory.csv", "MP.csv", "trajectory.json", "trajectory.png", "states.png")))
     return 0

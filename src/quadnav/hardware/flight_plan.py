@@ -41,8 +41,9 @@ from quadnav.planning import (
     plan,
 )
 from quadnav.planning.refine import refine
-from quadnav.trajectory.generate import TrajectorySettings, checking_world, make_trajectory
+from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import Trajectory
+from quadnav.trajectory.space import SafeSpace
 from quadnav.world.model import World
 
 #: Height the Tello's ``takeoff`` leaves it at, about, metres above the floor.
@@ -208,9 +209,8 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
     frame = TakeoffFrame.under(problem.start, yaw)
     _check_route(fence, frame, route)
     waypoints = np.vstack([frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT]), route])
-    free_world, _ = checking_world(world, problem.margin, waypoints)
+    reference = make_trajectory(waypoints, trajectory, SafeSpace(world, problem.margin))
     flight = FlightPlan(problem, result, fence, frame, route,
-                        prune(route, problem.free_world),
-                        make_trajectory(waypoints, trajectory, free_world), trajectory.v_max)
+                        prune(route, problem.free_world), reference, trajectory.v_max)
     flight.check()
     return flight

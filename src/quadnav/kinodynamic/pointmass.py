@@ -141,6 +141,22 @@ class SampledQuadrotor:
                          (tilt * spsi - sphi * cpsi) * specific,
                          cphi * np.cos(theta) * specific - self.gravity], axis=-1)
 
+    def control_for(self, acceleration: ArrayLike) -> FloatArray | None:
+        """The control (3,) ``(phi, theta, T)`` that gives ``acceleration`` (3,) m/s^2, or
+        None when it lies outside the limits (the inverse of :meth:`acceleration`)."""
+        specific = np.asarray(acceleration, dtype=np.float64) + np.array([0, 0, self.gravity])
+        size = float(np.linalg.norm(specific))
+        if size == 0.0:
+            return None
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        # The thrust direction in the heading frame is (cos phi sin theta, -sin phi,
+        # cos phi cos theta).
+        x, y, z = (c * specific[0] + s * specific[1], -s * specific[0] + c * specific[1],
+                   specific[2])
+        control = np.array([math.asin(-y / size), math.atan2(x, z), self.mass * size])
+        inside = np.all((control >= self.control_lower) & (control <= self.control_upper))
+        return control if inside else None
+
     def sample_controls(self, rng: np.random.Generator, count: int) -> FloatArray:
         """``count`` controls (count, 3) drawn uniformly within the limits."""
         return rng.uniform(self.control_lower, self.control_upper, size=(count, 3))

@@ -30,6 +30,7 @@ cheaply, it spares those motions the chord checks and is counted on its own.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable
@@ -46,12 +47,13 @@ from quadnav.kinodynamic.pointmass import (
 )
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
-from quadnav.world.connectivity import disconnected
+from quadnav.planning.problem import make_problem
 from quadnav.world.model import World
-from quadnav.world.placement import Placement, classify_point, format_point
 
 #: Largest distance, m, from a tree motion to the chords it is checked by.
 CHORD_TOLERANCE = 0.02
+#: Acceleration of the straight flight along a leg out of the margin, m/s^2.
+LEG_ACCELERATION = 1.0
 #: Goal-biased samples have a standard deviation of this times the closest distance.
 GOAL_SPREAD = 0.5
 #: Nearest-state metric: the sample's distance to ``p + LOOKAHEAD v``, s.
@@ -121,6 +123,12 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
     """Plan a flight from ``start`` (at rest) into the ball of ``settings.goal_radius``
     around ``goal`` by kinodynamic RRT (see the module docstring).
 
+    Starts and goals are checked as every planner checks them
+    (:func:`~quadnav.planning.make_problem`, with the margin plus the chord tolerance): one
+    inside the margin is left by its leg, flown straight from rest to rest
+    (:func:`leg_motions`) before the tree grows; for a goal inside it, the goal region is
+    centred on the end of its leg, the nearest point that keeps the margin.
+
     Args:
         world: the map, blocks not inflated.
         start: (3,) start position, m; the vehicle starts at rest.
@@ -137,27 +145,24 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         start and goal checks and loading the collision kernels.
 
     Raises:
-        QuadnavError: a start or goal outside the boundary, in a block or within
-            ``margin + CHORD_TOLERANCE`` of one, or provably disconnected.
+        QuadnavError: a start or goal outside the boundary or in a block, the start equal
+            to the goal, a start or goal the vehicle cannot leave the margin from, or a
+            start and goal provably disconnected.
     """
     model = model or SampledQuadrotor()
     if not (math.isfinite(margin) and margin >= 0):
         raise QuadnavError(f"margin must be >= 0 m, got {margin}")
-    free = world.inflate(margin + CHORD_TOLERANCE)
-    start_point = _check_end(world, free, start, margin, "start")
-    goal_point = _check_end(world, free, goal, margin, "goal")
-    if disconnected(free, start_point, goal_point):
-        raise QuadnavError(
-            f"{world.name}: start {format_point(start_point)} and goal "
-            f"{format_point(goal_point)} are disconnected with a {margin:g} m margin: "
-            "no path exists")
+    problem = make_problem(world, start, goal, margin + CHORD_TOLERANCE)
+    free, goal_point = problem.free_world, problem.search_goal
     free.segments_free(np.zeros((0, 2, 3)))  # load the kernels and the block grid
     clock = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
-    tree = _Tree(np.concatenate([start_point, np.zeros(3)]))
+    tree = _Tree(np.concatenate([problem.start, np.zeros(3)]))
+    for state, control, duration in leg_motions(model, problem.start_leg):
+        tree.add(tree.size - 1, state, control, duration)
     extend = _Extender(model, free, world.lower[2] + margin, settings)
-    closest = float(np.linalg.norm(start_point - goal_point))
-    reached = 0 if closest <= settings.goal_radius else -1
+    closest = float(np.linalg.norm(problem.search_start - goal_point))
+    reached = tree.size - 1 if closest <= settings.goal_radius else -1
     iterations, time_to_goal = 0, 0.0 if reached == 0 else None
     while reached < 0 and iterations < settings.max_iterations:
         elapsed = time.perf_counter() - clock
@@ -240,18 +245,28 @@ class _Extender:
         return ends[best], controls[best]
 
 
-def _check_end(world: World, free: World, point: ArrayLike, margin: float, label: str
-               ) -> FloatArray:
-    """``point`` as (3,) float64 if the planner can use it, else QuadnavError naming it."""
-    report = classify_point(world, point, margin, label)
-    if report.placement in (Placement.OUTSIDE, Placement.IN_BLOCK):
-        raise QuadnavError(f"{report}; the quadrotor must {label} in free space")
-    if not free.is_free(report.point):
-        raise QuadnavError(
-            f"{label} {format_point(report.point)} is within {margin + CHORD_TOLERANCE:g} m "
-            f"(safety margin {margin:g} m + chord tolerance {CHORD_TOLERANCE:g} m) of a block "
-            "or the boundary; move it or lower the margin")
-    return report.point
+def leg_motions(model: SampledQuadrotor, leg: FloatArray
+                ) -> list[tuple[FloatArray, FloatArray, float]]:
+    """The motions (end state (6,), control (3,), duration s) that fly the polyline ``leg``
+    (K, 3) straight, each segment from rest to rest: full acceleration along it for half
+    the time, full deceleration for the other half (at most :data:`LEG_ACCELERATION`,
+    less where the limits or the speed limit ask)."""
+    motions = []
+    for begin, end in itertools.pairwise(np.asarray(leg, dtype=np.float64)):
+        length = float(np.linalg.norm(end - begin))
+        direction = (end - begin) / length
+        rate = LEG_ACCELERATION
+        if model.speed_limit is not None:
+            rate = min(rate, 0.9 * model.speed_limit**2 / length)
+        while (model.control_for(rate * direction) is None
+               or model.control_for(-rate * direction) is None):
+            rate /= 2.0
+        half = math.sqrt(length / rate)
+        middle = np.concatenate([0.5 * (begin + end), rate * half * direction])
+        motions.append((middle, model.control_for(rate * direction), half))
+        motions.append((np.concatenate([end, np.zeros(3)]), model.control_for(-rate * direction),
+                        half))
+    return motions
 
 
 def _motions_free(free: World, state: FloatArray, accelerations: FloatArray,

@@ -1,10 +1,15 @@
 """Path stage: plan a collision-free path through a World.
 
 * :func:`make_problem` — check a start, goal and margin against a world.
-* :func:`plan` — run a planner by name (``rrtstar``, ``ompl:RRTstar``, ...).
+* :func:`plan` — run a planner by name (``rrtstar``, ``ompl:RRTstar``, ...); a goal in
+  sight of the start is joined at once, without a search.
 * :class:`PlannerSettings` — budget, seed, step, goal bias, ...
 * :class:`PlanResult` — path (N, 3), explored tree and statistics.
 """
+
+import time
+
+import numpy as np
 
 from quadnav.planning.problem import PlanningProblem, make_problem
 from quadnav.planning.registry import Progress, get_planner, planner_names
@@ -18,6 +23,7 @@ __all__ = [
     "PlanningProblem",
     "PostStep",
     "Progress",
+    "direct_result",
     "get_planner",
     "make_problem",
     "path_length",
@@ -36,4 +42,22 @@ def plan(problem: PlanningProblem, settings: PlannerSettings | None = None,
         planner: ``rrtstar`` or ``ompl:NAME`` (see :func:`planner_names`).
         progress: called now and then with (fraction of the budget used, best length).
     """
-    return get_planner(planner)(problem, settings or PlannerSettings(), progress)
+    search = get_planner(planner)
+    settings = settings or PlannerSettings()
+    return direct_result(problem, planner, settings) or search(problem, settings, progress)
+
+
+def direct_result(problem: PlanningProblem, planner: str, settings: PlannerSettings
+                  ) -> PlanResult | None:
+    """The straight path when the search goal is in sight of the search start (a free
+    segment in the inflated world): no search can do better. ``None`` otherwise."""
+    began = time.perf_counter()
+    ends = np.stack([problem.search_start, problem.search_goal])
+    if not problem.free_world.segment_free(*ends):
+        return None
+    seconds = time.perf_counter() - began
+    length = path_length(ends)
+    stats = PlanStats(iterations=0, nodes=2, seconds=seconds, time_to_first=seconds,
+                      cost_history=np.array([[seconds, length]]), stopped_by="direct")
+    return PlanResult(planner, True, problem.full_path(ends), ends, np.array([-1, 0]), stats,
+                      settings.seed, "the goal is in sight of the start: joined directly")

@@ -342,18 +342,6 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
     )
 
 
-def _search_part(problem: PlanningProblem, path: FloatArray) -> FloatArray:
-    """The part (M, 3) of a full path (N, 3) from ``search_start`` to ``search_goal``."""
-    first = 0 if np.array_equal(problem.start, problem.search_start) else 1
-    stop = len(path) - (0 if np.array_equal(problem.goal, problem.search_goal) else 1)
-    search = path[first:stop]
-    if (len(search) < 2 or not np.array_equal(search[0], problem.search_start)
-            or not np.array_equal(search[-1], problem.search_goal)
-            or not np.array_equal(problem.full_path(search), path)):
-        raise ValueError("the path does not run from the problem's start to its goal")
-    return search
-
-
 def simplify_ompl(problem: PlanningProblem, path: ArrayLike, time_limit: float = 1.0,
                   seed: int = 0) -> FloatArray:
     """Shorten a path with OMPL's path simplifier, checking motions exactly.
@@ -372,7 +360,7 @@ def simplify_ompl(problem: PlanningProblem, path: ArrayLike, time_limit: float =
         (M, 3) collision-free path with the same ends, not longer than ``path``.
     """
     points = np.asarray(path, dtype=np.float64).reshape(-1, 3)
-    search = _search_part(problem, points)
+    search = problem.search_part(points)
     with _quiet():
         ou.RNG.setSeed(_ompl_seed(seed))
         si = _space_information(problem.free_world)

@@ -2,14 +2,18 @@
 
 :func:`make_problem` turns what the user gave into a :class:`PlanningProblem`:
 
-* a start or goal outside the boundary or inside a real block is an error naming it;
+* a start or goal outside the boundary or inside a real block is an error naming it, and
+  so is a start equal to the goal;
 * one inside the safety margin (on the boundary, or close to a block) is usable: the
-  path leaves the margin by a short straight *leg* to the nearest free point found (the
-  leg avoids every real block) and a :class:`~quadnav.errors.PlanningWarning` says so;
+  path leaves the margin by a short *leg* (:mod:`quadnav.planning.legs`), the only part
+  of the flight allowed inside the margin, and a :class:`~quadnav.errors.PlanningWarning`
+  says so;
 * a start and goal provably in different parts of free space are an error, found fast.
 
 Planners search the inflated world between :attr:`PlanningProblem.search_start` and
 :attr:`PlanningProblem.search_goal`; :meth:`PlanningProblem.full_path` adds the legs.
+Every entry point (``plan``, ``fly``, ``traj``, ``kino``, ``tello fly``) checks its query
+here, so they accept and refuse the same starts and goals.
 """
 
 from __future__ import annotations
@@ -21,14 +25,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.planning.legs import find_leg
+from quadnav.planning.result import path_length
 from quadnav.world.connectivity import disconnected
 from quadnav.world.model import FloatArray, World
 from quadnav.world.placement import classify_point, format_point
-
-#: How far past a margin face a leg ends, metres, so its end is strictly free.
-LEG_CLEARANCE = 1e-6
-#: Rounds of face projection tried when leaving overlapping margins.
-_LEG_DEPTH = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,29 +40,71 @@ class PlanningProblem:
         world: the map as read, blocks not inflated.
         margin: safety margin, metres.
         free_world: ``world`` inflated by ``margin``; planners search its free space.
-        start: (3,) where the path starts, metres, exactly as given.
-        goal: (3,) where the path ends, metres, exactly as given.
-        search_start: (3,) free point where the search starts (``start`` when it is free).
-        search_goal: (3,) free point where the search ends (``goal`` when it is free).
+        start_leg: (K, 3) polyline from the start, exactly as given, out of the margin to
+            :attr:`search_start`; just the start (1, 3) when it is free.
+        goal_leg: (K, 3) polyline from :attr:`search_goal` into the margin to the goal,
+            exactly as given; just the goal (1, 3) when it is free.
     """
 
     world: World
     margin: float
     free_world: World
-    start: FloatArray
-    goal: FloatArray
-    search_start: FloatArray
-    search_goal: FloatArray
+    start_leg: FloatArray
+    goal_leg: FloatArray
+
+    def __post_init__(self) -> None:
+        for name in ("start_leg", "goal_leg"):
+            leg = np.array(getattr(self, name), dtype=np.float64).reshape(-1, 3)
+            leg.flags.writeable = False
+            object.__setattr__(self, name, leg)
+
+    @classmethod
+    def free(cls, world: World, free_world: World, start: ArrayLike, goal: ArrayLike,
+             margin: float = 0.0) -> PlanningProblem:
+        """A query between two points already free in ``free_world`` (no legs)."""
+        return cls(world, margin, free_world, np.reshape(start, (1, 3)),
+                   np.reshape(goal, (1, 3)))
+
+    @property
+    def start(self) -> FloatArray:
+        """(3,) where the path starts, metres."""
+        return self.start_leg[0]
+
+    @property
+    def goal(self) -> FloatArray:
+        """(3,) where the path ends, metres."""
+        return self.goal_leg[-1]
+
+    @property
+    def search_start(self) -> FloatArray:
+        """(3,) free point where the search starts (``start`` when it is free)."""
+        return self.start_leg[-1]
+
+    @property
+    def search_goal(self) -> FloatArray:
+        """(3,) free point where the search ends (``goal`` when it is free)."""
+        return self.goal_leg[0]
 
     def full_path(self, search_path: ArrayLike) -> FloatArray:
         """The path (N, 3) from ``start`` to ``goal`` around a ``search_path`` (M, 3)
         that runs from ``search_start`` to ``search_goal``: the legs are added."""
-        points = [np.asarray(search_path, dtype=np.float64).reshape(-1, 3)]
-        if not np.array_equal(self.start, self.search_start):
-            points.insert(0, self.start[None])
-        if not np.array_equal(self.goal, self.search_goal):
-            points.append(self.goal[None])
-        return np.concatenate(points)
+        search = np.asarray(search_path, dtype=np.float64).reshape(-1, 3)
+        return np.concatenate([self.start_leg[:-1], search, self.goal_leg[1:]])
+
+    def search_part(self, path: ArrayLike) -> FloatArray:
+        """The part (M, 3) of a full path (N, 3) from ``search_start`` to ``search_goal``;
+        QuadnavError unless the path has exactly the legs :meth:`full_path` adds."""
+        points = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+        head, tail = len(self.start_leg) - 1, len(self.goal_leg) - 1
+        if len(points) < head + tail + 1:
+            raise QuadnavError(f"a path of {len(points)} points cannot hold the legs out "
+                               "of the safety margin")
+        if not (np.array_equal(points[:head + 1], self.start_leg)
+                and np.array_equal(points[len(points) - tail - 1:], self.goal_leg)):
+            raise QuadnavError("the path does not begin with the problem's start leg and "
+                               "end with its goal leg (from "
+                               f"{format_point(self.start)} to {format_point(self.goal)})")
+        return points[head:len(points) - tail]
 
 
 def make_problem(world: World, start: ArrayLike | None, goal: ArrayLike | None,
@@ -75,7 +118,7 @@ def make_problem(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         margin: safety margin, metres, >= 0.
     """
     free_world = world.inflate(margin)
-    ends = []
+    reports = []
     for label, point, own in (("start", start, world.start), ("goal", goal, world.goal)):
         if point is None:
             point = own
@@ -85,62 +128,31 @@ def make_problem(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         if not report.usable:
             verb = "start" if label == "start" else "end"
             raise QuadnavError(f"{report}; a path must {verb} in free space")
-        ends.append((report.point, _leave_margin(world, free_world, report.point, label)))
-    (start_point, search_start), (goal_point, search_goal) = ends
-    if disconnected(free_world, search_start, search_goal):
+        reports.append(report)
+    start_point, goal_point = (report.point for report in reports)
+    if np.array_equal(start_point, goal_point):
+        raise QuadnavError(f"start and goal are the same point {format_point(start_point)}: "
+                           "there is nothing to fly; give a different --goal")
+    start_leg = find_leg(world, free_world, start_point, margin, "start")
+    goal_leg = find_leg(world, free_world, goal_point, margin, "goal")[::-1]
+    for label, leg in (("start", start_leg), ("goal", goal_leg[::-1])):
+        if len(leg) > 1:
+            _warn_leg(label, leg, margin)
+    problem = PlanningProblem(world, float(margin), free_world, start_leg, goal_leg)
+    if disconnected(free_world, problem.search_start, problem.search_goal):
         raise QuadnavError(
             f"{world.name}: start {format_point(start_point)} and goal "
             f"{format_point(goal_point)} are disconnected with a {margin:g} m margin: "
             "no path exists")
-    return PlanningProblem(world, float(margin), free_world, start_point, goal_point,
-                           search_start, search_goal)
+    return problem
 
 
-def _leave_margin(world: World, free_world: World, point: FloatArray, label: str
-                  ) -> FloatArray:
-    """The nearest free point found by a straight leg from ``point`` that avoids real
-    blocks (``point`` itself when free); warns when a leg is needed."""
-    if free_world.is_free(point):
-        return point
-    # The leg may run along the boundary where the point itself lies on it.
-    blocks_only = world.replace(boundary=world.boundary + np.repeat([-1.0, 1.0], 3))
-    exits = [c for c in _margin_exits(free_world, point)
-             if blocks_only.segment_free(point, c)]
-    if not exits:
-        raise QuadnavError(
-            f"{label} {format_point(point)} is inside the safety margin and no straight way "
-            "out of it avoids the blocks; move it or lower --margin")
-    exit_point = min(exits, key=lambda c: float(np.linalg.norm(c - point)))
+def _warn_leg(label: str, leg: FloatArray, margin: float) -> None:
+    """Say that the point ``leg[0]`` lies in the margin and how the leg leaves it."""
+    shape = "straight" if len(leg) == 2 else f"{len(leg) - 1}-segment"
     warnings.warn(
-        f"{label} {format_point(point)} is inside the safety margin; the path leaves it "
-        f"by a straight {np.linalg.norm(exit_point - point):.3g} m leg to "
-        f"{format_point(exit_point)}", PlanningWarning, stacklevel=3)
-    return exit_point
-
-
-def _margin_exits(free_world: World, point: FloatArray) -> list[FloatArray]:
-    """Free points reached from ``point`` by moving straight out of the inflated blocks
-    and boundary that hold it: each round projects every candidate still not free onto
-    the faces of what holds it, up to :data:`_LEG_DEPTH` rounds."""
-    inner_lower = free_world.lower + LEG_CLEARANCE
-    inner_upper = free_world.upper - LEG_CLEARANCE
-    found: list[FloatArray] = []
-    frontier = [point]
-    for _ in range(_LEG_DEPTH):
-        moved: list[FloatArray] = []
-        for candidate in frontier:
-            clamped = np.clip(candidate, inner_lower, inner_upper)
-            if not np.array_equal(clamped, candidate):
-                moved.append(clamped)
-            for row in free_world.blocks_containing(candidate):
-                box = free_world.blocks[row]
-                for axis in range(3):
-                    for face, push in ((box[axis], -LEG_CLEARANCE),
-                                       (box[axis + 3], LEG_CLEARANCE)):
-                        projected = candidate.copy()
-                        projected[axis] = face + push
-                        moved.append(projected)
-        free = free_world.points_free(moved) if moved else np.zeros(0, dtype=bool)
-        found.extend(m for m, ok in zip(moved, free, strict=True) if ok)
-        frontier = [m for m, ok in zip(moved, free, strict=True) if not ok]
-    return found
+        f"{label} {format_point(leg[0])} is inside the {margin:g} m safety margin; "
+        f"only the {shape} {path_length(leg):.3g} m leg "
+        f"{'out of it, to' if label == 'start' else 'into it, from'} {format_point(leg[-1])}, "
+        f"may come closer; the rest of the flight keeps {margin:g} m", PlanningWarning,
+        stacklevel=3)

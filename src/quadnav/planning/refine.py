@@ -10,14 +10,11 @@ from __future__ import annotations
 import dataclasses
 import time
 
-import numpy as np
-
 from quadnav.errors import QuadnavError
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import FloatArray, PlanResult, PostStep, path_length
 from quadnav.planning.shortcut import shortcut_path
 from quadnav.planning.smoothing import smooth_path
-from quadnav.world.placement import format_point
 
 
 def refine(problem: PlanningProblem, result: PlanResult, seed: int | None = None,
@@ -44,7 +41,7 @@ def refine(problem: PlanningProblem, result: PlanResult, seed: int | None = None
         raise QuadnavError(f"smoothing options {', '.join(smoothing)} given with smooth=False")
     if not result.solved:
         return result
-    search = _search_part(problem, result.path)
+    search = problem.search_part(result.path)
     started = time.perf_counter()
     search = shortcut_path(problem.free_world, search,
                            seed=result.seed if seed is None else seed, attempts=attempts)
@@ -61,21 +58,3 @@ def _post_step(name: str, path: FloatArray, started: float) -> PostStep:
     """The :class:`PostStep` of a step begun at ``perf_counter() == started`` that left
     the full path (N, 3)."""
     return PostStep(name, path_length(path), len(path), time.perf_counter() - started)
-
-
-def _search_part(problem: PlanningProblem, path: FloatArray) -> FloatArray:
-    """The part (M, 3) of a full path (N, 3) from the search start to the search goal;
-    QuadnavError unless the path has the legs :meth:`PlanningProblem.full_path` adds."""
-    head = 0 if np.array_equal(problem.start, problem.search_start) else 1
-    tail = 0 if np.array_equal(problem.goal, problem.search_goal) else 1
-    if len(path) < head + tail + 1:
-        raise QuadnavError(f"a path of {len(path)} points cannot hold the legs out of the "
-                           "safety margin")
-    for point, expected, label in (
-            (path[0], problem.start, "start"), (path[head], problem.search_start, "search start"),
-            (path[-1], problem.goal, "goal"), (path[-1 - tail], problem.search_goal,
-                                               "search goal")):
-        if not np.array_equal(point, expected):
-            raise QuadnavError(f"the path does not pass through the problem's {label} "
-                               f"{format_point(expected)} (found {format_point(point)})")
-    return path[head:len(path) - tail]

@@ -59,6 +59,10 @@ class PlanStats:
         cost_history: (K, 2) rows ``(time s, path length m)``, one per improvement of
             the best solution, in time order; (0, 2) when there was no solution.
         post: post-processing steps applied after the search, in order.
+        stopped_by: what ended the search: ``"iterations"`` (the sample cap),
+            ``"improvement"`` (the samples allowed after the first solution),
+            ``"time"`` (the time budget), ``"direct"`` (the goal was in sight of the
+            start), or ``None`` when the planner does not say.
     """
 
     iterations: int
@@ -67,6 +71,7 @@ class PlanStats:
     time_to_first: float | None
     cost_history: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     post: tuple[PostStep, ...] = ()
+    stopped_by: str | None = None
 
     def __post_init__(self) -> None:
         history = np.array(self.cost_history, dtype=np.float64).reshape(-1, 2)
@@ -130,3 +135,14 @@ def tree_edges(nodes: FloatArray, parents: IntArray) -> FloatArray:
     ``parents`` (N,), -1 for a root)."""
     child = np.flatnonzero(parents >= 0)
     return np.stack([nodes[child], nodes[parents[child]]], axis=1).reshape(-1, 2, 3)
+
+
+def no_path_message(stats: PlanStats, max_iterations: int | None, time_limit: float) -> str:
+    """One line saying that a search found no path, which limit ended it and the
+    command-line flag that lifts it."""
+    if stats.stopped_by == "iterations":
+        return (f"no path found: the search stopped at its cap of {max_iterations:,} samples "
+                f"after {stats.seconds:.3g} s of its {time_limit:g} s; raise --iterations "
+                "(0: no cap, the time budget alone)")
+    return (f"no path found in {stats.seconds:.3g} s ({stats.iterations:,} samples): the "
+            "time budget ran out; raise --time")

@@ -20,7 +20,7 @@ import numpy as np
 from quadnav.planning.nodegrid import new_node_grid, rebuild
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.registry import Progress
-from quadnav.planning.result import PlanResult, PlanStats
+from quadnav.planning.result import PlanResult, PlanStats, no_path_message
 from quadnav.planning.rrtstar_kernel import (
     BEST_COST,
     BEST_VERTEX,
@@ -119,7 +119,7 @@ def _load_kernels() -> None:
     world = World(boundary=np.array([0.0, 0.0, 0.0, 1.0, 1.0, 1.0]),
                   blocks=np.array([[0.4, 0.4, 0.4, 0.6, 0.6, 0.6]]))
     start, goal = np.array([0.1, 0.1, 0.1]), np.array([0.9, 0.9, 0.9])
-    problem = PlanningProblem(world, 0.0, world, start, goal, start, goal)
+    problem = PlanningProblem.free(world, world, start, goal)
     _search(problem, PlannerSettings(max_iterations=200, seed=0, time_limit=3600.0), None)
     TreeState.empty(1).grown(1, 2, world.lower, world.extent)
 
@@ -151,6 +151,7 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     origin, extent = world.lower.copy(), world.extent.copy()
     rng = np.random.default_rng(settings.seed)
     limit = settings.max_iterations or np.iinfo(np.int64).max
+    stopped_by = None
     state = TreeState.empty(min(_INITIAL_CAPACITY, limit + 1))
     counts = np.zeros(3, dtype=np.int64)
     best = np.array([np.inf, -1.0])
@@ -163,12 +164,20 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     while True:
         now = time.perf_counter() - clock
         if best[BEST_VERTEX] >= 0 and (not history or best[BEST_COST] < history[-1][1]):
+            if not history:  # the kernel returns at the first solution: this count is exact
+                limit = min(limit, settings.limit_after_first(int(counts[ITERATIONS])))
             history.append((now, float(best[BEST_COST])))
             time_to_first = history[0][0]
         if progress is not None:
             progress(min(now / settings.time_limit, 1.0), float(best[BEST_COST]))
-        done = counts[ITERATIONS] >= limit or now >= settings.time_limit
-        if done or (settings.stop_at_first and time_to_first is not None):
+        if counts[ITERATIONS] >= limit:
+            capped = limit == settings.max_iterations and time_to_first is None
+            stopped_by = "iterations" if capped else "improvement"
+        elif now >= settings.time_limit:
+            stopped_by = "time"
+        else:
+            stopped_by = None
+        if stopped_by is not None:
             break
         chunk = int(min(chunk, limit - counts[ITERATIONS]))
         if counts[NODES] + chunk > state.capacity:
@@ -185,12 +194,12 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     count = int(counts[NODES])
     stats = PlanStats(iterations=int(counts[ITERATIONS]), nodes=count,
                       seconds=time.perf_counter() - clock, time_to_first=time_to_first,
-                      cost_history=np.array(history).reshape(-1, 2))
+                      cost_history=np.array(history).reshape(-1, 2), stopped_by=stopped_by)
     tree = (state.nodes[:count].copy(), state.parent[:count].copy())
     if best[BEST_VERTEX] < 0:
         return PlanResult(NAME, False, np.zeros((0, 3)), *tree, stats, settings.seed,
-                          f"no path found in {stats.iterations} iterations "
-                          f"({stats.seconds:.3g} s); try a longer --time")
+                          no_path_message(stats, settings.max_iterations,
+                                          settings.time_limit))
     search_path = state.path_to(int(best[BEST_VERTEX]))
     if not np.array_equal(search_path[-1], goal):
         search_path = np.vstack([search_path, goal])

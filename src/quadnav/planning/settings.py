@@ -31,6 +31,10 @@ class PlannerSettings:
     Attributes:
         time_limit: wall-time budget of the search, s (> 0).
         max_iterations: stop after this many samples (``None``: only the time limit).
+        improve_iterations: once a first solution is found, stop after this many more
+            samples (``None``: no such limit). With no ``max_iterations``, the search then
+            takes as long as a first solution needs (within ``time_limit``) and is still
+            repeatable: the same seed gives the same path. RRT* only.
         seed: seed of every random choice; the same seed gives the same result.
         stop_at_first: return as soon as a first solution is found.
         step: largest edge a tree grows by in one iteration, metres (``None``: scaled to
@@ -46,6 +50,7 @@ class PlannerSettings:
 
     time_limit: float = DEFAULT_TIME_LIMIT
     max_iterations: int | None = None
+    improve_iterations: int | None = None
     seed: int = 0
     stop_at_first: bool = False
     step: float | None = None
@@ -60,6 +65,9 @@ class PlannerSettings:
              f"time limit must be a positive number of seconds, got {self.time_limit}"),
             (self.max_iterations is None or self.max_iterations >= 1,
              f"max iterations must be >= 1, got {self.max_iterations}"),
+            (self.improve_iterations is None or self.improve_iterations >= 0,
+             f"iterations after the first solution must be >= 0, got "
+             f"{self.improve_iterations}"),
             (self.step is None or (math.isfinite(self.step) and self.step > 0),
              f"step must be a positive number of metres, got {self.step}"),
             (0 <= self.goal_bias < 1, f"goal bias must be in [0, 1), got {self.goal_bias}"),
@@ -77,6 +85,15 @@ class PlannerSettings:
     def replace(self, **changes: object) -> PlannerSettings:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""
         return dataclasses.replace(self, **changes)
+
+    def limit_after_first(self, first: int) -> int:
+        """The sample cap of a search whose first solution came at sample ``first``."""
+        cap = self.max_iterations or np.iinfo(np.int64).max
+        if self.stop_at_first:
+            return min(cap, first)
+        if self.improve_iterations is None:
+            return cap
+        return min(cap, first + self.improve_iterations)
 
     def step_for(self, world: World) -> float:
         """The step in metres for ``world``: the set one, else scaled to its boundary."""

@@ -1,6 +1,8 @@
 """Trajectory stage: smooth, timed references through waypoints (a planner's path).
 
 * :func:`make_trajectory` with :class:`TrajectorySettings` — the stage's entry point.
+* :class:`SafeSpace` — the map and margin a trajectory keeps outside the legs out of the
+  margin; :func:`trajectory_margins` measures the margin kept, exactly.
 * :class:`Trajectory` — a piecewise polynomial per axis with a yaw reference.
 * Generators ``(waypoints (N, 3), segment times (N - 1,)) -> Trajectory``:
   :func:`minimum_snap`, :func:`minimum_snap_qp`, :func:`quintic_segments`,
@@ -13,23 +15,23 @@ from quadnav.trajectory.feasibility import FeasibilityReport, Limits, feasibilit
 from quadnav.trajectory.generate import (
     METHODS,
     TrajectorySettings,
-    checking_world,
     make_trajectory,
 )
 from quadnav.trajectory.minsnap import minimum_snap, snap_cost
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import Samples, Trajectory, YawMode, ppoly_from_ascending
 from quadnav.trajectory.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.space import SafeSpace, trajectory_margins
 
 __all__ = [
     "METHODS",
     "FeasibilityReport",
     "Limits",
+    "SafeSpace",
     "Samples",
     "Trajectory",
     "TrajectorySettings",
     "YawMode",
-    "checking_world",
     "cubic_spline",
     "feasibility",
     "make_trajectory",
@@ -39,4 +41,5 @@ __all__ = [
     "quintic_c2",
     "quintic_segments",
     "snap_cost",
+    "trajectory_margins",
 ]

@@ -78,7 +78,7 @@ def require_free_polyline(free_world: World, waypoints: FloatArray) -> None:
             "(it touches an inflated block or the boundary)")
 
 
-def _sample(trajectory: Trajectory, spacing: float) -> tuple[FloatArray, FloatArray]:
+def check_samples(trajectory: Trajectory, spacing: float) -> tuple[FloatArray, FloatArray]:
     """Times (K,) s and positions (K, 3) m, consecutive positions at most ``spacing`` m
     apart and their chords close to the curve, the breaks among the times (see the module
     docstring)."""
@@ -113,7 +113,7 @@ def _offending(trajectory: Trajectory, free_world: World, spacing: float
                ) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
     """Sample times (K,), positions (K, 3) and the indices (J,) of the sample pairs whose
     straight segment is not in free space, in time order."""
-    t, positions = _sample(trajectory, spacing)
+    t, positions = check_samples(trajectory, spacing)
     free = free_world.segments_free(np.stack([positions[:-1], positions[1:]], axis=1))
     return t, positions, np.flatnonzero(~free)
 

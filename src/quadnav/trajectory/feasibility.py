@@ -1,10 +1,17 @@
-"""Can a Tello-class quadrotor fly a trajectory? Peaks of speed, acceleration, jerk, thrust
-and tilt against :class:`Limits`, and the clearance left to the obstacles.
+"""Can a Tello-class quadrotor fly a trajectory? Peaks of speed, acceleration, jerk, thrust,
+tilt and body rate against :class:`Limits`, and the clearance left to the obstacles.
 
-The thrust a quadrotor needs is along ``a + g e_z`` (``a`` the acceleration, ``e_z`` up):
-its size over ``g`` is the thrust-to-weight ratio it must produce, and its angle from
-``e_z`` the tilt of the body. Everything is sampled every ``dt`` s and at every waypoint
-time, so a peak between samples can be missed by a little.
+The thrust a quadrotor needs, per unit mass, is ``f = a + g e_z + D v`` (``a`` the
+acceleration, ``e_z`` up, ``D`` its linear drag per unit mass, ``v`` the velocity): its
+size over ``g`` is the thrust-to-weight ratio it must produce, and its angle from ``e_z``
+the tilt of the body. The body turns as ``f`` does: the roll and pitch rate is the rate of
+the thrust direction, ``|f' - b (b . f')| / |f|`` with ``b = f / |f|`` and
+``f' = j + D a`` (``j`` the jerk). Everything is sampled every ``dt`` s and at every
+waypoint time, so a peak between samples can be missed by a little.
+
+Flying a trajectory ``k`` times slower divides speeds by ``k``, accelerations by ``k^2``
+and jerks by ``k^3``: :func:`slowest_feasible_scale` finds the least ``k`` that brings every
+quantity within the limits.
 """
 
 from __future__ import annotations
@@ -39,6 +46,11 @@ class Limits:
         jerk_max: jerk (size), m/s^3, > 0, or ``None`` for no limit.
         thrust_to_weight_max: largest thrust over weight the motors give, > 0.
         tilt_max: largest tilt of the body from upright, rad, in (0, pi).
+        thrust_to_weight_min: smallest thrust over weight the motors give, > 0, or
+            ``None`` for no limit.
+        body_rate_max: largest roll and pitch rate, rad/s, > 0, or ``None`` for no limit.
+        drag: (3,) linear drag per unit mass along x, y, z, 1/s, >= 0 (the thrust also
+            pushes against it).
     """
 
     v_max: float = 2.0
@@ -46,10 +58,17 @@ class Limits:
     jerk_max: float | None = None
     thrust_to_weight_max: float = 2.0
     tilt_max: float = math.radians(35.0)
+    thrust_to_weight_min: float | None = None
+    body_rate_max: float | None = None
+    drag: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         for name, value in dataclasses.asdict(self).items():
-            if value is None and name == "jerk_max":
+            if name == "drag":
+                if len(value) != 3 or not all(math.isfinite(d) and d >= 0 for d in value):
+                    raise QuadnavError(f"limit drag must be 3 finite numbers >= 0, got {value}")
+                continue
+            if value is None and name in _OPTIONAL:
                 continue
             if not (math.isfinite(value) and value > 0):
                 raise QuadnavError(f"limit {name} must be a finite number > 0, got {value}")
@@ -77,6 +96,7 @@ class _Quantity(NamedTuple):
     unit: str
     shown: float  # display units per SI unit
     limit: str  # the Limits attribute
+    largest: bool = True  # a maximum (else a minimum)
 
 
 _QUANTITIES = (
@@ -85,8 +105,14 @@ _QUANTITIES = (
     _Quantity("max_jerk", "jerk", " m/s^3", 1.0, "jerk_max"),
     _Quantity("max_thrust_to_weight", "thrust-to-weight ratio", "", 1.0,
               "thrust_to_weight_max"),
+    _Quantity("min_thrust_to_weight", "thrust-to-weight ratio", "", 1.0,
+              "thrust_to_weight_min", largest=False),
     _Quantity("max_tilt", "tilt", " deg", math.degrees(1.0), "tilt_max"),
+    _Quantity("max_body_rate", "roll/pitch rate", " deg/s", math.degrees(1.0),
+              "body_rate_max"),
 )
+#: Limits that may be None (no limit).
+_OPTIONAL = ("jerk_max", "thrust_to_weight_min", "body_rate_max")
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,8 +125,10 @@ class FeasibilityReport:
         max_speed: largest speed, m/s.
         max_acceleration: largest acceleration (size), m/s^2.
         max_jerk: largest jerk (size), m/s^3 (at a waypoint, the value just after it).
-        max_thrust_to_weight: largest ``|a + g e_z| / g``.
-        max_tilt: largest angle between ``a + g e_z`` and ``e_z``, rad.
+        max_thrust_to_weight: largest ``|f| / g`` (module docstring).
+        min_thrust_to_weight: smallest ``|f| / g``.
+        max_tilt: largest angle between ``f`` and ``e_z``, rad.
+        max_body_rate: largest roll and pitch rate, rad/s.
         min_clearance: smallest clearance of the sampled positions in the world, m
             (negative inside an obstacle), or ``None`` when no world was given.
         limits: the limits checked.
@@ -114,7 +142,9 @@ class FeasibilityReport:
     max_acceleration: Peak
     max_jerk: Peak
     max_thrust_to_weight: Peak
+    min_thrust_to_weight: Peak
     max_tilt: Peak
+    max_body_rate: Peak
     min_clearance: Peak | None
     limits: Limits
     world_name: str | None
@@ -140,7 +170,7 @@ class FeasibilityReport:
         for q in _QUANTITIES:
             peak, limit = getattr(self, q.field), getattr(self.limits, q.limit)
             bound = "no limit" if limit is None else f"limit {limit * q.shown:.3g}{q.unit}"
-            lines.append(f"  max {q.label} {peak.value * q.shown:.3g}{q.unit} at "
+            lines.append(f"  {q.field[:3]} {q.label} {peak.value * q.shown:.3g}{q.unit} at "
                          f"{peak.t:.2f} s ({bound})")
         if self.min_clearance is not None:
             lines.append(f"  min clearance {self.min_clearance.value:.3g} m at "
@@ -169,20 +199,15 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
         raise QuadnavError(f"sample interval dt must be a finite number > 0 s, got {dt}")
     limits = limits or Limits()
     t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
-    thrust = trajectory.acceleration(t) + np.array([0.0, 0.0, GRAVITY])
-    series = {
-        "max_speed": np.linalg.norm(trajectory.velocity(t), axis=1),
-        "max_acceleration": np.linalg.norm(trajectory.acceleration(t), axis=1),
-        "max_jerk": np.linalg.norm(trajectory.jerk(t), axis=1),
-        "max_thrust_to_weight": np.linalg.norm(thrust, axis=1) / GRAVITY,
-        "max_tilt": np.arctan2(np.hypot(thrust[:, 0], thrust[:, 1]), thrust[:, 2]),
-    }
-    peaks = {name: _peak(values, t) for name, values in series.items()}
+    motion = [trajectory.derivative(t, order) for order in (1, 2, 3)]
+    series = quantities(*motion, limits)
+    peaks = {q.field: _peak(series[q.field], t, q.largest) for q in _QUANTITIES}
     violations = []
     for q in _QUANTITIES:
         peak, limit = peaks[q.field], getattr(limits, q.limit)
-        if limit is not None and peak.value > limit:
-            violations.append(f"{q.label} {peak.value * q.shown:.3g}{q.unit} exceeds the limit "
+        if limit is not None and _breaks(peak.value, limit, q.largest):
+            bound = "exceeds the limit" if q.largest else "is below the least"
+            violations.append(f"{q.label} {peak.value * q.shown:.3g}{q.unit} {bound} "
                               f"{limit * q.shown:.3g}{q.unit} at t = {peak.t:.2f} s")
     clearance = None
     if free_world is not None:
@@ -195,3 +220,60 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
                              min_clearance=clearance, limits=limits,
                              world_name=None if free_world is None else free_world.name,
                              violations=tuple(violations))
+
+
+def _breaks(value: float, limit: float, largest: bool) -> bool:
+    return value > limit if largest else value < limit
+
+
+def quantities(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
+               limits: Limits) -> dict[str, FloatArray]:
+    """Each checked quantity (N,) from the velocity, acceleration and jerk (N, 3), SI
+    units, by the field names of :class:`FeasibilityReport` (module docstring)."""
+    drag = np.asarray(limits.drag)
+    thrust = acceleration + np.array([0.0, 0.0, GRAVITY]) + drag * velocity
+    size = np.linalg.norm(thrust, axis=1)
+    turn = jerk + drag * acceleration
+    direction = thrust / size[:, None]
+    sideways = turn - direction * np.einsum("ij,ij->i", direction, turn)[:, None]
+    return {
+        "max_speed": np.linalg.norm(velocity, axis=1),
+        "max_acceleration": np.linalg.norm(acceleration, axis=1),
+        "max_jerk": np.linalg.norm(jerk, axis=1),
+        "max_thrust_to_weight": size / GRAVITY,
+        "min_thrust_to_weight": size / GRAVITY,
+        "max_tilt": np.arctan2(np.hypot(thrust[:, 0], thrust[:, 1]), thrust[:, 2]),
+        "max_body_rate": np.linalg.norm(sideways, axis=1) / size,
+    }
+
+
+def _within(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
+            limits: Limits) -> bool:
+    """Whether every quantity is within ``limits``."""
+    series = quantities(velocity, acceleration, jerk, limits)
+    return not any(
+        getattr(limits, q.limit) is not None and _breaks(
+            float(series[q.field].max() if q.largest else series[q.field].min()),
+            getattr(limits, q.limit), q.largest) for q in _QUANTITIES)
+
+
+def slowest_feasible_scale(trajectory: Trajectory, limits: Limits, dt: float = 0.01,
+                           largest: float = 1e3) -> float | None:
+    """The least factor ``k >= 1`` by which flying ``trajectory`` ``k`` times slower keeps
+    every sampled quantity within ``limits`` (to 0.1 %), or None when even ``largest``
+    does not (e.g. a thrust floor that slowing down cannot meet)."""
+    t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
+    v, a, j = (trajectory.derivative(t, order) for order in (1, 2, 3))
+
+    def ok(k: float) -> bool:
+        return _within(v / k, a / k**2, j / k**3, limits)
+
+    if ok(1.0):
+        return 1.0
+    if not ok(largest):
+        return None
+    low, high = 1.0, largest
+    while high / low > 1.001:
+        middle = math.sqrt(low * high)
+        low, high = (low, middle) if ok(middle) else (middle, high)
+    return high

@@ -2,22 +2,23 @@
 
 :func:`make_trajectory` is the stage's one entry point: segment times from a trapezoidal
 speed profile (optionally optimised for total time plus snap), the chosen generator, safe
-corridors for the constrained minimum-snap QP, and — given a world — collision-aware
-refinement that adds waypoints until a dense exact check finds no collision.
+corridors for the constrained minimum-snap QP, and — given a :class:`SafeSpace` —
+straight legs out of the margin and collision-aware refinement of the rest, which adds
+waypoints until a dense exact check finds it clear of the margin.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.interpolate import PPoly
 
-from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.errors import QuadnavError
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
@@ -25,6 +26,7 @@ from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
 from quadnav.trajectory.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.space import SafeSpace
 from quadnav.trajectory.timing import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
@@ -37,14 +39,13 @@ from quadnav.world.model import World
 Generator = Callable[[FloatArray, FloatArray], Trajectory]
 #: Methods by name, in the order the command line lists them.
 METHODS = ("minsnap", "quintic", "quintic-c2", "cubic")
-#: Steps of the bisection that finds the margin a path itself keeps.
-_MARGIN_STEPS = 30
+#: Legs out of the margin fly at this fraction of the speed and acceleration limits: they
+#: pass close to obstacles, and a short move at full acceleration turns the body fast.
+LEG_SLOW_DOWN = 0.5
 #: Samples of a trajectory searched for its peak speed and acceleration.
 _PEAK_SAMPLES = 4000
 #: Extra stretch, relative, beyond what the sampled peaks ask for.
 _STRETCH_ALLOWANCE = 1e-3
-#: Widening of the checked boundary, metres, so a path may start on the boundary.
-_BOUNDARY_SLACK = 1e-9
 
 
 @dataclass(frozen=True)
@@ -123,23 +124,47 @@ def _generator(settings: TrajectorySettings, free_world: World | None) -> Genera
 
 
 def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = None,
-                    free_world: World | None = None) -> Trajectory:
+                    space: SafeSpace | None = None) -> Trajectory:
     """A trajectory through ``waypoints`` (N, 3), metres, passing each one exactly, at
     rest at both ends, within the speed and acceleration limits of ``settings``.
 
     Args:
         waypoints: e.g. a planner's path; consecutive repeats are dropped.
         settings: method, limits and options (defaults: minimum snap, Tello-class limits).
-        free_world: the map inflated by the margin the trajectory must keep; when given,
-            waypoints are added until a dense exact check finds no collision (see
-            :func:`quadnav.trajectory.collision.refine_until_free`), and corridors can be
-            used. Every waypoint segment must be free in it.
+        space: the map and the margin to keep. When given, the path's legs out of the
+            margin (see :class:`SafeSpace`) are flown straight, each segment from rest to
+            rest at :data:`LEG_SLOW_DOWN` of the limits, so they stay exactly on the path;
+            the rest is one smooth piece to which
+            waypoints are added until a dense exact check finds it free in the inflated
+            map (see :func:`quadnav.trajectory.collision.refine_until_free`), and
+            corridors can be used. Without it nothing is checked.
     """
     settings = settings or TrajectorySettings()
     points = np.array(waypoints, dtype=np.float64).reshape(-1, 3)
     points = points[np.concatenate([[True], np.any(np.diff(points, axis=0) != 0, axis=1)])]
     if len(points) < 2:
         raise QuadnavError(f"a trajectory needs at least 2 distinct waypoints, got {len(points)}")
+    if space is None:
+        return _piece(points, settings, None).replace(yaw_mode=settings.yaw)
+    head, tail = space.split(points)
+    straight = settings.replace(corridor=False, optimize_times=False,  # two points: a line
+                                v_max=LEG_SLOW_DOWN * settings.v_max,
+                                a_max=LEG_SLOW_DOWN * settings.a_max)
+    pieces = [_piece(points[i:i + 2], straight, None) for i in range(head)]
+    if tail > head:
+        pieces.append(_piece(points[head:tail + 1], settings, space.inflated))
+    pieces += [_piece(points[i:i + 2], straight, None) for i in range(tail, len(points) - 1)]
+    legs = (sum(p.duration for p in pieces[:head]),
+            sum(p.duration for p in pieces[len(pieces) - (len(points) - 1 - tail):]))
+    main = pieces[head] if tail > head else pieces[0]
+    return concatenate(pieces, settings.method, main.info).replace(yaw_mode=settings.yaw,
+                                                                   legs=legs)
+
+
+def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World | None
+           ) -> Trajectory:
+    """One trajectory from rest to rest through ``points`` (N, 3), kept in the free space
+    of ``free_world`` when given, within the limits of ``settings``."""
     if settings.corridor and free_world is not None:
         points, _ = safe_corridors(free_world, points)
     times = trapezoidal_times(points, settings.v_max, settings.a_max)
@@ -158,8 +183,22 @@ def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = 
     stretch = slow_down_factor(trajectory, settings.v_max, settings.a_max)
     if stretch > 1.0:
         trajectory = fly(trajectory.waypoints, stretch * trajectory.segment_times)
-    info = {**trajectory.info, "time_stretch": stretch}
-    return trajectory.replace(yaw_mode=settings.yaw, info=info)
+    return trajectory.replace(info={**trajectory.info, "time_stretch": stretch})
+
+
+def concatenate(pieces: list[Trajectory], method: str, info: dict) -> Trajectory:
+    """One trajectory flying ``pieces`` one after the other (each ends where the next
+    begins), named ``method`` with ``info``."""
+    if len(pieces) == 1:
+        return pieces[0].replace(info=info)
+    order = max(p.poly.c.shape[0] for p in pieces)
+    coefficients = np.concatenate([np.pad(p.poly.c, ((order - p.poly.c.shape[0], 0),
+                                                     (0, 0), (0, 0))) for p in pieces], axis=1)
+    starts = np.cumsum([0.0, *(p.duration for p in pieces[:-1])])
+    breaks = np.concatenate([[0.0], *(p.breaks[1:] + s for p, s in zip(pieces, starts,
+                                                                        strict=True))])
+    waypoints = np.concatenate([pieces[0].waypoints[:1], *(p.waypoints[1:] for p in pieces)])
+    return Trajectory(PPoly(coefficients, breaks), waypoints, method, info=info)
 
 
 def slow_down_factor(trajectory: Trajectory, v_max: float, a_max: float) -> float:
@@ -174,42 +213,3 @@ def slow_down_factor(trajectory: Trajectory, v_max: float, a_max: float) -> floa
     acceleration = float(np.linalg.norm(trajectory.acceleration(t), axis=1).max())
     factor = max(speed / v_max, math.sqrt(acceleration / a_max))
     return factor * (1.0 + _STRETCH_ALLOWANCE) if factor > 1.0 else 1.0
-
-
-def with_boundary_slack(world: World) -> World:
-    """``world`` with its boundary widened by :data:`_BOUNDARY_SLACK` metres, so a point on
-    the boundary itself counts as free."""
-    return world.replace(boundary=world.boundary + np.repeat([-_BOUNDARY_SLACK,
-                                                              _BOUNDARY_SLACK], 3))
-
-
-def checking_world(world: World, margin: float, waypoints: ArrayLike) -> tuple[World, float]:
-    """The world a trajectory through ``waypoints`` is checked against, and its margin.
-
-    That is ``world`` inflated by the largest margin, at most ``margin`` metres, in which
-    every waypoint segment is free; its boundary is widened by :data:`_BOUNDARY_SLACK` so
-    that a path starting on the boundary itself is not a collision. Warns when the margin
-    is below ``margin`` (a start or goal inside the margin); QuadnavError when a segment
-    touches a real block or leaves the boundary.
-    """
-    points = np.asarray(waypoints, dtype=np.float64)
-    segments = np.stack([points[:-1], points[1:]], axis=1)
-    slack = with_boundary_slack
-    blocked = np.flatnonzero(~slack(world).segments_free(segments))
-    if blocked.size:
-        bad = int(blocked[0])
-        raise QuadnavError(f"path segment {bad} from {points[bad].round(4).tolist()} to "
-                           f"{points[bad + 1].round(4).tolist()} collides with the map")
-    if slack(world.inflate(margin)).segments_free(segments).all():
-        return slack(world.inflate(margin)), margin
-    low, high = 0.0, margin
-    for _ in range(_MARGIN_STEPS):
-        middle = 0.5 * (low + high)
-        if slack(world.inflate(middle)).segments_free(segments).all():
-            low = middle
-        else:
-            high = middle
-    warnings.warn(f"the path comes within {low:.3f} m of an obstacle or the boundary (its "
-                  f"start or goal lies in the {margin:g} m margin); the trajectory is kept "
-                  f"{low:.3f} m clear", PlanningWarning, stacklevel=2)
-    return slack(world.inflate(low)), low

@@ -66,6 +66,9 @@ class Trajectory:
         yaw_mode: constant yaw, or facing the direction of travel.
         yaw0: the constant yaw (and the yaw when there is no horizontal motion), rad.
         info: solver facts for reports (e.g. snap cost, corridor count), JSON-ready.
+        legs: how long the leg out of the safety margin at the start and the leg into it
+            at the goal take, s (0 without such legs); between them the trajectory keeps
+            the whole margin (see :mod:`quadnav.trajectory.space`).
     """
 
     poly: PPoly
@@ -74,6 +77,7 @@ class Trajectory:
     yaw_mode: YawMode = YawMode.CONSTANT
     yaw0: float = 0.0
     info: dict = field(default_factory=dict)
+    legs: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         waypoints = np.array(self.waypoints, dtype=np.float64).reshape(-1, 3)
@@ -97,6 +101,11 @@ class Trajectory:
     def duration(self) -> float:
         """Total time, s."""
         return float(self.poly.x[-1])
+
+    @property
+    def main_window(self) -> tuple[float, float]:
+        """``(begin, end)``, s: the times between the legs, when the whole margin is kept."""
+        return self.legs[0], self.duration - self.legs[1]
 
     @property
     def segment_times(self) -> FloatArray:
