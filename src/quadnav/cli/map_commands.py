@@ -8,12 +8,20 @@ from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
     add_start_goal_arguments,
+    positive_float,
     resolve_margin,
     resolve_start_goal,
 )
 from quadnav.errors import QuadnavError
+from quadnav.planning import PlannerSettings, make_problem
+from quadnav.planning import plan as run_planner
 from quadnav.world import load_world, write_map
 from quadnav.world.placement import classify_point, format_point
+
+#: Exit code of ``map check`` when neither a path nor a proof that none exists was found.
+EXIT_UNDECIDED = 1
+#: Default time ``map check`` searches for a path, s.
+CHECK_TIME = 5.0
 
 
 def info(args: argparse.Namespace) -> int:
@@ -35,7 +43,8 @@ def info(args: argparse.Namespace) -> int:
 
 
 def check(args: argparse.Namespace) -> int:
-    """Say where start and goal lie; exit 2 if one is in a block or outside the boundary."""
+    """Say where start and goal lie and whether a path joins them; exit 2 if one is in a
+    block or outside the boundary, or no path exists; 1 if the search could not decide."""
     world = load_world(args.map)
     margin = resolve_margin(args, world)
     start, goal = resolve_start_goal(args, world)
@@ -53,6 +62,16 @@ def check(args: argparse.Namespace) -> int:
                              for r in bad)
         raise QuadnavError(f"{world.name}: {names}; expected points inside the boundary "
                            "and outside every block")
+    if len(points) < 2:
+        return 0
+    problem = make_problem(world, start, goal, margin)  # a proven disconnection: exit 2
+    result = run_planner(problem, PlannerSettings(stop_at_first=True, time_limit=args.time))
+    if not result.solved:
+        print(f"connected: undecided: {result.message}; and no proof that no path exists "
+              "was found")
+        return EXIT_UNDECIDED
+    print(f"connected: yes, a path of {result.length:.3f} m joins them (found in "
+          f"{result.stats.seconds:.3g} s)")
     return 0
 
 
@@ -89,13 +108,20 @@ def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p)
     p.set_defaults(handler=info)
 
-    p = commands.add_parser("check", help="where start and goal lie",
+    p = commands.add_parser("check", help="where start and goal lie, and whether a path "
+                                          "joins them",
                             description="Say whether start and goal lie in free space, inside "
                                         "the safety margin, inside a block (which one) or "
-                                        "outside the boundary. Exit 2 if either is unusable.")
+                                        "outside the boundary, and whether a path joins them "
+                                        "(proved by finding one, or disproved by a voxel "
+                                        "over-approximation of free space). Exit 0 when one "
+                                        "does; 2 if a point is unusable or provably no path "
+                                        "exists; 1 if the search ran out of time undecided.")
     add_map_argument(p)
     add_margin_argument(p)
     add_start_goal_arguments(p)
+    p.add_argument("--time", type=positive_float, default=CHECK_TIME, metavar="S",
+                   help=f"time to search for a path, s (default: {CHECK_TIME:g})")
     p.set_defaults(handler=check)
 
     p = commands.add_parser("show", help="draw the map in 3D",

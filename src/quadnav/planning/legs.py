@@ -15,10 +15,11 @@ point to the nearest free point of the inflated world found as follows:
    path is then shortened by line of sight. Only when that search exhausts its budget is
    the point refused, with one line saying why.
 
-The *leg world* is the real map with every block grown by the leg clearance, half the
-margin or half the point's own distance to the blocks (per axis) if that is less, and the
-boundary itself allowed: a leg never touches a block and keeps clear of blocks as far as
-the point it starts from allows, while it may run along the boundary the point lies on.
+The *leg world* is the real map with every block grown by the leg clearance — the point's
+own distance to the blocks (per axis), or the margin if that is less, minus a sliver —
+and the boundary itself allowed: a leg never comes closer to a block than the point it
+starts from (a vehicle that fits there fits all along its leg), while it may run along
+the boundary the point lies on.
 """
 
 from __future__ import annotations
@@ -41,8 +42,8 @@ from quadnav.world.placement import format_point
 LEG_END_DEPTH = 0.05
 #: How far past a margin face a leg ends where there is no such room, metres.
 LEG_END_CLEARANCE = 1e-6
-#: Leg clearance as a fraction of the margin (and of the point's own block clearance).
-LEG_CLEARANCE_FRACTION = 0.5
+#: The sliver, as a fraction, by which a leg may come closer to the blocks than its point.
+LEG_CLEARANCE_SLIVER = 1e-3
 #: Widening of the boundary in the leg world, metres, so a point on it is free.
 BOUNDARY_SLACK = 1e-9
 #: Rounds of face projection tried when leaving overlapping margins.
@@ -63,7 +64,7 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     if free_world.is_free(point):
         return point[None].copy()
     own = float(point_margins(world, point, boundary=False)[0]) if len(world.blocks) else np.inf
-    clearance = LEG_CLEARANCE_FRACTION * min(margin, own)
+    clearance = (1.0 - LEG_CLEARANCE_SLIVER) * min(margin, own)
     grow = np.repeat([-clearance, clearance], 3)
     legs = world.replace(blocks=world.blocks + grow, boundary=world.boundary
                          + np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3))
@@ -145,11 +146,11 @@ def _search_around(legs: World, free_world: World, point: FloatArray, margin: fl
 def _grid_lines(axis: int, point: FloatArray, lower: FloatArray, upper: FloatArray,
                 legs: World, free_world: World) -> np.ndarray:
     """Sorted coordinates along ``axis`` of every face of the leg world's and the inflated
-    world's blocks and boundaries inside [lower, upper], of the point and of the box."""
+    world's blocks and boundaries inside [lower, upper], and of that box."""
     faces = np.concatenate([legs.blocks[:, [axis, axis + 3]].ravel(),
                             free_world.blocks[:, [axis, axis + 3]].ravel(),
                             free_world.boundary[[axis, axis + 3]],
-                            [point[axis], lower[axis], upper[axis]]])
+                            [lower[axis], upper[axis]]])
     lines = np.unique(faces[(faces >= lower[axis]) & (faces <= upper[axis])])
     # Faces computed two ways (2 - 0.2 and 5 - 3.2) may differ by a rounding error.
     return lines[np.concatenate([[True], np.diff(lines) > _SAME_LINE])]
@@ -157,7 +158,7 @@ def _grid_lines(axis: int, point: FloatArray, lower: FloatArray, upper: FloatArr
 
 def _shortest_way_out(legs: World, free_world: World, point: FloatArray,
                       lines: list[np.ndarray]) -> FloatArray | None:
-    """The chain of face-adjacent cells (C, 6) of the grid on ``lines`` from the one at
+    """The chain of face-adjacent cells (C, 6) of the grid on ``lines`` from one holding
     ``point`` to the nearest cell free in ``free_world``, all free in ``legs``, measured
     between cell centres; None when there is none in the grid."""
     shape = tuple(len(x) - 1 for x in lines)
@@ -173,12 +174,12 @@ def _shortest_way_out(legs: World, free_world: World, point: FloatArray,
         both = open_cells[here] & open_cells[there]
         rows.append(here[both])
         cols.append(there[both])
-    # The point lies on a grid vertex: it sees the open cells around it.
-    corner = [int(np.searchsorted(x, p)) for x, p in zip(lines, point, strict=True)]
-    around = [index[i, j, k] for i in (corner[0] - 1, corner[0]) for j in (corner[1] - 1,
-              corner[1]) for k in (corner[2] - 1, corner[2])
-              if 0 <= i < shape[0] and 0 <= j < shape[1] and 0 <= k < shape[2]]
-    around = [cell for cell in around if open_cells[cell]]
+    # The point sees the open cells whose closed boxes hold it (one, or up to 8 when it
+    # lies on their faces).
+    holding = [np.flatnonzero((x[:-1] <= p) & (p <= x[1:])) for x, p in zip(lines, point,
+                                                                               strict=True)]
+    around = [index[i, j, k] for i in holding[0] for j in holding[1] for k in holding[2]
+              if open_cells[index[i, j, k]]]
     source = len(centres)
     rows.append(np.full(len(around), source))
     cols.append(np.array(around, dtype=np.int64))

@@ -84,12 +84,14 @@ def polyline_margin(world: World, points: ArrayLike, boundary: bool = True) -> f
     low = float(box_margins(world, np.concatenate([segments.min(axis=1),
                                                    segments.max(axis=1)], axis=1),
                             boundary).min())
-    if low >= vertices or low <= 0.0:
-        return min(low, vertices)
+    if low >= vertices:
+        return vertices
     if not boundary:
-        world = world.replace(boundary=np.concatenate([p.min(axis=0) - 2 * vertices,
-                                                       p.max(axis=0) + 2 * vertices]))
-    high = vertices
+        world = world.replace(boundary=np.concatenate([p.min(axis=0) - 2 * vertices - 1.0,
+                                                       p.max(axis=0) + 2 * vertices + 1.0]))
+    if not world.segments_free(segments).all():
+        return min(low, 0.0)
+    low, high = max(low, 0.0), vertices
     while high - low > 1e-9:
         middle = 0.5 * (low + high)
         if world.inflate(middle).segments_free(segments).all():

@@ -1,0 +1,137 @@
+"""One rule for every entry point, and honest failures.
+
+``plan``, ``fly``, ``kino quadrotor`` and ``tello fly`` check their queries the same way
+(:func:`quadnav.planning.make_problem`): they accept and refuse the same starts and
+goals, with the same message. Failures say what ended a search and how to lift it; a
+trajectory the vehicle cannot fly is refused before flying, with the fastest settings
+that would work.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+
+import pytest
+from clitools import assert_user_error, run
+
+from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.hardware.flight_plan import plan_flight
+from quadnav.kinodynamic import KinoSettings
+from quadnav.kinodynamic.quadrotor import plan_quadrotor
+from quadnav.mission import MissionSettings, fly_mission, warn_if_margin_too_small
+from quadnav.planning import PlannerSettings, make_problem, plan
+from quadnav.sim.envelope import check_flyable
+from quadnav.trajectory.generate import TrajectorySettings
+from quadnav.vehicle.params import load_params
+from quadnav.world import World, load_world
+
+#: A room 4 m long with a wall 0.1 m in front of its x = 0 face.
+ROOM = World(boundary=[0, 0, 0, 4, 3, 2], blocks=[[0.1, 1, 0, 0.6, 2, 2]], name="room")
+GOAL = (3.5, 1.5, 1.0)
+QUERIES = {
+    "free": ((2.0, 1.5, 1.0), None),
+    "on the boundary": ((4.0, 0.5, 1.0), None),
+    "in a pocket": ((0.0, 1.5, 1.0), None),
+    "in a block": ((0.3, 1.5, 1.0), r"start \(0.3, 1.5, 1\): inside block 0"),
+    "outside": ((5.0, 1.5, 1.0), r"start \(5, 1.5, 1\): outside the boundary"),
+    "the goal": (GOAL, r"start and goal are the same point \(3.5, 1.5, 1\)"),
+}
+
+
+def _entry_points():
+    """Each entry point's query, as a function of the start, run in the library."""
+    return {
+        "plan": lambda s: plan(make_problem(ROOM, s, GOAL, 0.2), PlannerSettings(
+            max_iterations=2000)),
+        "fly": lambda s: fly_mission(ROOM, s, GOAL, 0.2, MissionSettings(
+            planning=PlannerSettings(max_iterations=2000))),
+        "kino quadrotor": lambda s: plan_quadrotor(ROOM, s, GOAL, KinoSettings(
+            max_iterations=2000), margin=0.2),
+        "tello fly": lambda s: plan_flight(ROOM, s, GOAL, 0.2 - 0.1, 0.0, planning=(
+            PlannerSettings(max_iterations=2000))),
+    }
+
+
+@pytest.mark.parametrize("query", QUERIES)
+def test_every_entry_point_accepts_and_refuses_the_same_starts(query):
+    start, refusal = QUERIES[query]
+    outcomes = {}
+    for name, run_query in _entry_points().items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PlanningWarning)
+            try:
+                result = run_query(start)
+            except QuadnavError as error:
+                outcomes[name] = str(error)
+            else:
+                outcomes[name] = "accepted"
+                success = getattr(result, "success", getattr(result, "solved", True))
+                assert success, (name, query)
+    if refusal is None:
+        assert set(outcomes.values()) == {"accepted"}, outcomes
+    else:
+        assert len(set(outcomes.values())) == 1, outcomes
+        assert outcomes["plan"] != "accepted"
+        assert re.search(refusal, outcomes["plan"]), outcomes["plan"]
+
+
+def test_a_start_equal_to_the_goal_is_one_line_exit_2(tmp_path):
+    for command in (("plan",), ("fly",), ("kino", "quadrotor", "forest")):
+        result = run(*command, "--start", "1", "1", "1", "--goal", "1", "1", "1", "-o",
+                     tmp_path / "out", "--quiet")
+        assert_user_error(result, "start and goal are the same point (1, 1, 1)")
+        assert not (tmp_path / "out").exists()
+
+
+def test_the_default_flight_budget_solves_a_big_maze():
+    world = load_world("maze:cells=12x12,levels=3")
+    problem = make_problem(world, None, None, 0.2)
+    result = plan(problem, MissionSettings().planning)
+    assert result.solved, result.message
+    assert result.stats.stopped_by == "improvement"
+    again = plan(problem, MissionSettings().planning)
+    assert (again.path == result.path).all()  # bound by samples: the same seed, the same path
+
+
+def test_a_search_ended_by_its_time_budget_says_so(tmp_path):
+    result = run("plan", "maze:cells=12x12,levels=3", "--time", "0.001", "--quiet",
+                 "-o", tmp_path)
+    assert result.returncode == 1
+    assert "the time budget ran out; raise --time" in result.stderr
+
+
+def test_map_check_proves_connection_or_its_absence(tmp_path, shared_maps):
+    impossible = run("map", "check", shared_maps / "meam620" / "test_impossible.json")
+    assert_user_error(impossible, "are disconnected with a 0.1 m margin: no path exists")
+    window = run("map", "check", shared_maps / "meam620" / "test_window.json")
+    assert window.returncode == 0, window.stderr
+    assert "connected: yes, a path of" in window.stdout
+
+
+def test_a_trajectory_the_vehicle_cannot_fly_is_refused_with_what_would_work(tmp_path):
+    result = run("fly", "--speed", "10", "--accel", "20", "-o", tmp_path / "out", "--quiet")
+    assert_user_error(result, "the tello vehicle cannot fly this trajectory",
+                      "exceeds the limit", "the same path flies within every limit at --speed")
+    assert not (tmp_path / "out").exists()
+    advice = result.stderr.split("--speed ")[1].split()
+    speed, accel = float(advice[0]), float(advice[2])
+    assert speed < 10 and accel < 20
+    # The advice is right: at those settings the vehicle flies the same map cleanly.
+    world = load_world("forest")
+    settings = MissionSettings(trajectory=TrajectorySettings(v_max=speed, a_max=accel))
+    mission = fly_mission(world, None, None, None, settings)
+    check_flyable(mission.trajectory, settings.vehicle, settings.gains, speed, accel)
+    assert mission.success
+
+
+def test_a_margin_that_cannot_hold_the_body_is_warned_about():
+    tello = load_params("tello")
+    with pytest.warns(PlanningWarning, match=r"the 0.05 m margin cannot hold the tello "
+                                             r"vehicle's body \(it reaches 0.075 m"):
+        warn_if_margin_too_small(0.05, tello)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_if_margin_too_small(0.2, tello)
+    assert math.isclose(0.5 * float((tello.body_size**2).sum()) ** 0.5, 0.075)
