@@ -8,10 +8,11 @@ import re
 import numpy as np
 import pytest
 
-from quadnav.errors import MapError, QuadnavError
+from quadnav.errors import MapError, PlanningWarning, QuadnavError
 from quadnav.kinodynamic import KinoSettings
 from quadnav.kinodynamic.diffdrive import (
     CHORD_TOLERANCE,
+    LEG_SPEED,
     DiffDrive,
     arc_samples,
     control_profile,
@@ -228,8 +229,9 @@ def test_budget_ends_the_search_without_a_plan():
 
 
 @pytest.mark.parametrize(("start", "goal", "expected"), [
-    ((3.5, 3.0, 0.0), GOAL, "walls: start (3.5, 3) is within 0.31 m (robot radius 0.2 m + margin 0.1 m + tolerance 0.01 m) of rect 0 [3, 4] x [0, 6]"),
-    ((2.75, 3.0, 0.0), GOAL, "start (2.75, 3) is within 0.31 m (robot radius"),
+    ((3.5, 3.0, 0.0), GOAL, "walls: start (3.5, 3) is within 0.21 m (robot radius 0.2 m + tolerance 0.01 m) of rect 0 [3, 4] x [0, 6]"),
+    ((2.85, 3.0, 0.0), GOAL, "start (2.85, 3) is within 0.21 m (robot radius"),
+    ((1.0, 1.0, 0.0), (1.0, 1.0), "start and goal are the same point (1, 1)"),
     ((11.0, 3.0, 0.0), GOAL, "start (11, 3) is outside the boundary [0, 10] x [0, 10]"),
     (START, (9.0, 9.9), "tolerance 0.01 m) of the boundary"),
     (START, (6.5, 12.0), "goal (6.5, 12) is outside the boundary"),
@@ -337,8 +339,26 @@ def test_figures_are_written(tmp_path, walls_plan):
         assert (tmp_path / name).stat().st_size > 10_000
 
 
+def test_a_start_in_the_margin_leaves_it_by_turning_on_the_spot_and_driving_straight():
+    x = 3 - MODEL.radius - CHORD_TOLERANCE - 0.5 * MARGIN  # inside the margin of rect 0
+    with pytest.warns(PlanningWarning, match=rf"start \({x:.4g}, 3\) is inside the 0.1 m"):
+        result = plan_diffdrive(WALLS, (x, 3.0, 0.0), GOAL, SETTINGS, MODEL, margin=MARGIN)
+    assert result.solved
+    # Turn to face away from the wall (pi), then drive straight out of the margin.
+    assert np.allclose(np.abs(result.controls[:2]), [[0.0, MODEL.omega_max], [LEG_SPEED, 0.0]])
+    assert result.durations[0] == pytest.approx(np.pi / MODEL.omega_max)
+    leg_end = result.states[2]
+    assert leg_end[1] == 3.0 and 3 - leg_end[0] > MODEL.radius + CHORD_TOLERANCE + MARGIN
+    following = propagate(result.states[:-1], result.controls, result.durations)
+    assert np.allclose(following[:, :2], result.states[1:, :2], atol=1e-9)
+    assert np.allclose(angle_gap(following[:, 2], result.states[1:, 2]), 0, atol=1e-9)
+    # After the leg the robot keeps radius + margin from every rectangle.
+    kept = WALLS.inflate(MODEL.radius + MARGIN)
+    assert kept.points_free(result.states[2:, :2]).all()
+
+
 def test_chord_tolerance_is_part_of_the_clearance():
-    """A start just outside radius + margin, but inside the chord tolerance, is refused."""
-    x = 3 - MODEL.radius - MARGIN - 0.5 * CHORD_TOLERANCE
+    """A start just outside the radius, but inside the chord tolerance, is refused."""
+    x = 3 - MODEL.radius - 0.5 * CHORD_TOLERANCE
     with pytest.raises(QuadnavError, match="tolerance"):
         plan_diffdrive(WALLS, (x, 3.0, 0.0), GOAL, SETTINGS, MODEL, margin=MARGIN)

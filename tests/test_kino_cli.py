@@ -139,7 +139,8 @@ def test_diffdrive_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
     malformed.write_text("boundary 0 0 10 10\nrect 1 2 3\n")
     assert_user_errors(tmp_path / "out", [
         (("diffdrive", "forest", "--start", *IN_TRUNK[:2], "0", "--goal", "19", "19"),
-         "start (11.4, 6.525) is within 0.21 m", "of rect 0"),
+         "start (11.4, 6.525) is within 0.21 m (robot radius 0.2 m + tolerance 0.01 m)",
+         "of rect 0"),
         (("diffdrive", malformed, "--start", "1", "1", "0", "--goal", "9", "9"),
          "bad.map2d:2: rect: expected 4 numbers"),
         ((*DIFFDRIVE_FOREST, "--height", "9"), "slice height 9 m is outside"),

@@ -103,6 +103,10 @@ def _print_summary(mission: Mission) -> None:
           f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
           f"{100 * m['final_error_m']:.2f} cm; min clearance "
           + ("none (no blocks)" if clearance is None else f"{clearance:.3f} m"))
+    legs = ("" if m["trajectory_leg_margin_m"] is None else
+            f"; on the legs out of it {m['trajectory_leg_margin_m']:.3f} m")
+    print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the trajectory and "
+          f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m){legs}")
     print(f"  wall time: planning {m['planning_time_s']:.2f} s, trajectory "
           f"{m['trajectory_time_s']:.2f} s, simulation {m['sim_wall_time_s']:.2f} s "
           f"({m['real_time_factor']:.0f}x real time)")

@@ -26,24 +26,31 @@ their samples.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from quadnav.errors import QuadnavError
+from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import World2D, format_rect
+from quadnav.planning.legs import find_leg
+from quadnav.planning.result import path_length
+from quadnav.world.model import World
 
 FloatArray = NDArray[np.float64]
 
 NAME = "diffdrive"
 #: Largest distance between a checked chord and the arc it stands for, metres.
 CHORD_TOLERANCE = 0.01
+#: Speed along a leg out of the margin, m/s.
+LEG_SPEED = 0.5
 #: Standard deviation of goal-biased samples per metre between the goal and the tree's
 #: closest state.
 GOAL_SPREAD = 0.5
@@ -214,11 +221,14 @@ def _check_end(world: World2D, free: World2D, point: FloatArray, label: str,
 
 
 def check_query(world: World2D, start: ArrayLike, goal: ArrayLike, model: DiffDrive,
-                margin: float) -> tuple[World2D, FloatArray, FloatArray]:
-    """The world the search runs in, the start (3,) and the goal (2,), checked.
+                margin: float) -> tuple[World2D, FloatArray, FloatArray, FloatArray]:
+    """The world the search runs in, the start (3,), the goal (2,) and the start's leg.
 
-    The search world is ``world`` inflated by ``radius + margin + CHORD_TOLERANCE``; a
-    start or goal outside the boundary or not free there is a QuadnavError naming it.
+    The search world is ``world`` inflated by ``radius + margin + CHORD_TOLERANCE``. A
+    start or goal whose footprint (the disc plus the tolerance) crosses the boundary or a
+    rectangle is a QuadnavError naming it; one inside the margin is usable, as for every
+    planner (:func:`quadnav.planning.legs.find_leg`): the robot leaves the margin by its
+    leg (K, 2), and for a goal inside it the goal region is centred on the end of its leg.
     """
     start = np.array(start, dtype=np.float64)
     goal = np.array(goal, dtype=np.float64)
@@ -228,13 +238,62 @@ def check_query(world: World2D, start: ArrayLike, goal: ArrayLike, model: DiffDr
         raise QuadnavError(f"goal: expected 2 finite numbers x y, got {goal.tolist()}")
     if not (math.isfinite(margin) and margin >= 0):
         raise QuadnavError(f"margin must be >= 0 m, got {margin}")
-    free = world.inflate(model.radius + margin + CHORD_TOLERANCE)
-    clearance = (f"{model.radius + margin + CHORD_TOLERANCE:g} m (robot radius "
-                 f"{model.radius:g} m + margin {margin:g} m + tolerance {CHORD_TOLERANCE:g} m)")
-    _check_end(world, free, start[:2], "start", clearance)
-    _check_end(world, free, goal, "goal", clearance)
+    body = world.inflate(model.radius + CHORD_TOLERANCE)
+    free = body.inflate(margin)
+    footprint = (f"{model.radius + CHORD_TOLERANCE:g} m (robot radius {model.radius:g} m + "
+                 f"tolerance {CHORD_TOLERANCE:g} m)")
+    _check_end(world, body, start[:2], "start", footprint)
+    _check_end(world, body, goal, "goal", footprint)
+    if np.array_equal(start[:2], goal):
+        raise QuadnavError(f"start and goal are the same point ({goal[0]:.4g}, {goal[1]:.4g}):"
+                           " there is nothing to drive; give a different --goal")
+    start_leg, goal_leg = (_leg(body, margin, point, label) for point, label in (
+        (start[:2], "start"), (goal, "goal")))
     start[2] = wrap_angle(start[2])
-    return free, start, goal
+    return free, start, goal_leg[-1], start_leg
+
+
+def _leg(body: World2D, margin: float, point: FloatArray, label: str) -> FloatArray:
+    """The leg (K, 2) out of the margin from ``point`` (2,), a free point of ``body``
+    (the world inflated by the footprint); just the point when it keeps the margin.
+
+    The 2D world is lifted to 3D, each rectangle a box across a slab thicker than the
+    margin, so the 3D legs apply; the slab's floor and ceiling are never the way out."""
+    slab = margin + 1.0
+    lifted = World(boundary=[*body.lower, -slab, *body.upper, slab],
+                   blocks=np.column_stack([body.rects[:, :2], np.full(len(body), -2 * slab),
+                                           body.rects[:, 2:], np.full(len(body), 2 * slab)]),
+                   name=body.name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlanningWarning)
+        leg = find_leg(lifted, lifted.inflate(margin), np.array([*point, 0.0]), margin, label)
+    if len(leg) > 1:
+        warnings.warn(f"{label} ({point[0]:.4g}, {point[1]:.4g}) is inside the {margin:g} m "
+                      f"safety margin; only the {path_length(leg):.3g} m leg "
+                      f"{'out of' if label == 'start' else 'into'} it may come closer",
+                      PlanningWarning, stacklevel=4)
+    return leg[:, :2]
+
+
+def leg_motions(model: DiffDrive, heading: float, leg: FloatArray
+                ) -> list[tuple[FloatArray, FloatArray, float]]:
+    """The motions (end state (3,), control (2,), duration s) that drive the polyline
+    ``leg`` (K, 2) from ``heading`` rad: at each vertex turn on the spot at the full turn
+    rate to face the next one, then drive straight to it at :data:`LEG_SPEED` (or the top
+    speed, if lower)."""
+    motions = []
+    speed = min(LEG_SPEED, model.v_max)
+    for begin, end in itertools.pairwise(np.asarray(leg, dtype=np.float64)):
+        towards = math.atan2(end[1] - begin[1], end[0] - begin[0])
+        turn = float(wrap_angle(towards - heading))
+        if turn != 0.0:
+            motions.append((np.array([*begin, towards]),
+                            np.array([0.0, math.copysign(model.omega_max, turn)]),
+                            abs(turn) / model.omega_max))
+        motions.append((np.array([*end, towards]), np.array([speed, 0.0]),
+                        float(np.linalg.norm(end - begin)) / speed))
+        heading = towards
+    return motions
 
 
 class _Tree:
@@ -313,12 +372,15 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
         ``(v, omega)``, durations (K - 1,), and the whole tree.
     """
     model = model or DiffDrive()
+    free, start, goal, leg = check_query(world, start, goal, model, margin)
     clock = time.perf_counter()
-    free, start, goal = check_query(world, start, goal, model, margin)
     rng = np.random.default_rng(settings.seed)
-    tree = _Tree(start, settings.max_iterations + 1)
-    closest = float(np.hypot(*(start[:2] - goal)))
-    reached = 0 if closest <= settings.goal_radius else -1
+    motions = leg_motions(model, float(start[2]), leg)
+    tree = _Tree(start, settings.max_iterations + 1 + len(motions))
+    for state, control, duration in motions:
+        tree.add(tree.count - 1, control, duration, state)
+    closest = float(np.hypot(*(tree.states[tree.count - 1, :2] - goal)))
+    reached = tree.count - 1 if closest <= settings.goal_radius else -1
     iterations, reported = 0, 0.0
     elapsed = time.perf_counter() - clock
     while reached < 0 and iterations < settings.max_iterations and elapsed < settings.time_limit:
