@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import signal
+import subprocess
+import time
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import QUADNAV, assert_user_error, run
 
 from quadnav import __version__
 from quadnav.world import read_map
@@ -147,3 +150,23 @@ def test_malformed_map_file_names_file_and_line(tmp_path):
     path = tmp_path / "m.txt"
     path.write_text("boundary 0 0 0 5 5 5\n\nblock 1 1 1 2 2\n")
     assert_user_error(run("map", "info", path), f"{path}:3: block: expected 6 numbers")
+
+
+@pytest.mark.parametrize(("signum", "code", "words"), [
+    (signal.SIGINT, 130, "quadnav: interrupted"),
+    (signal.SIGTERM, 143, "quadnav: stopped by SIGTERM"),
+    (signal.SIGHUP, 129, "quadnav: stopped by SIGHUP"),
+])
+def test_a_stop_signal_while_starting_up_is_one_line(signum, code, words):
+    """Stopped at any point of start-up (the imports take most of a second) or of the
+    work: one line and 128 + the signal number, never a traceback."""
+    for delay in (0.15, 0.3, 0.6):
+        process = subprocess.Popen([*QUADNAV, "map", "info", "forest"], text=True,
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        time.sleep(delay)
+        process.send_signal(signum)
+        _, stderr = process.communicate(timeout=60)
+        if process.returncode == 0:  # finished before the signal came: nothing to check
+            continue
+        assert process.returncode == code, stderr
+        assert stderr.strip().splitlines() == [words], stderr
