@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from quadnav.errors import QuadnavError
 from quadnav.planning import PlannerSettings, planner_names
+from quadnav.runfolder import check_output_folder
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -66,11 +66,10 @@ def probability(text: str) -> float:
 
 
 def output_folder(path: str) -> Path:
-    """The output folder ``path``; QuadnavError if a file is in the way."""
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise QuadnavError(f"{folder}: expected a folder for the output, found a file")
-    return folder
+    """The output folder ``path``, checked before any work: QuadnavError (one line) if a
+    file is in the way or the folder cannot be written or created
+    (:func:`~quadnav.runfolder.check_output_folder`)."""
+    return check_output_folder(path)
 
 
 def margin_value(text: str) -> float:

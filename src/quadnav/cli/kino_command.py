@@ -46,7 +46,6 @@ from quadnav.cli.args import (
     resolve_margin,
 )
 from quadnav.errors import QuadnavError
-from quadnav.files import atomic_output
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_TOLERANCE, plan_quadrotor, replay
@@ -60,6 +59,7 @@ from quadnav.kinodynamic.replay6dof import (
 from quadnav.kinodynamic.result import FloatArray, KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import MAP2D_SUFFIX, World2D, load_world2d
+from quadnav.runfolder import replaced_folder
 from quadnav.world import load_world
 
 if TYPE_CHECKING:
@@ -71,6 +71,8 @@ EXIT_NOT_REACHED = 1
 PLAN_FILES = ("states.csv", "controls.csv", "tracks.csv")
 #: The figure of ``--compare``; removed when a run does not draw it.
 COMPARE_FIGURE = "biased_vs_unbiased.png"
+#: Every file kino writes.
+KINO_FILES = ("kino.json", *PLAN_FILES, "kino.png", "controls.png", COMPARE_FIGURE)
 #: Largest deviation, m, of the wheel tracks in tracks.csv from the true wheel paths.
 TRACK_TOLERANCE = 0.01
 
@@ -153,25 +155,21 @@ def summary(vehicle: str, map_name: str, result: KinoResult, settings: KinoSetti
 
 def write_outputs(folder: Path, result: KinoResult, data: dict[str, Any],
                   tables: dict[str, str], figures: dict[str, Callable[[], Figure]]) -> list[str]:
-    """Write kino.json, the plan's tables (only when solved) and the figures; remove the
-    plan files and the comparison figure this run does not write. Returns the names
+    """Write kino.json, the plan's tables (only when solved) and the figures, whole or not
+    at all (:func:`~quadnav.runfolder.replaced_folder`: the plan files and the comparison
+    figure of an earlier run that this one does not write are removed). Returns the names
     written, in order."""
     from quadnav.viz.figures import save_figure
 
-    folder.mkdir(parents=True, exist_ok=True)
     written = list(tables) if result.solved else []
-    for name in written:
-        with atomic_output(folder / name) as tmp:
-            tmp.write_text(tables[name])
-    for name in (*PLAN_FILES, COMPARE_FIGURE):
-        if name not in written and name not in figures:
-            (folder / name).unlink(missing_ok=True)
-    with atomic_output(folder / "kino.json") as tmp:
-        tmp.write_text(json.dumps(data, indent=2) + "\n")
-    written.append("kino.json")
-    for name, draw in figures.items():
-        save_figure(draw(), folder / name)
-        written.append(name)
+    with replaced_folder(folder, KINO_FILES) as staging:
+        for name in written:
+            (staging / name).write_text(tables[name])
+        (staging / "kino.json").write_text(json.dumps(data, indent=2) + "\n")
+        written.append("kino.json")
+        for name, draw in figures.items():
+            save_figure(draw(), staging / name)
+            written.append(name)
     return written
 
 

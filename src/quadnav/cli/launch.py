@@ -9,6 +9,7 @@ only after the handlers are in place, so an interrupt during start-up is one lin
 
 from __future__ import annotations
 
+import _thread
 import signal
 import sys
 from collections.abc import Sequence
@@ -31,6 +32,20 @@ def _raise_stopped(signum: int, frame: FrameType | None) -> None:
     raise Stopped(signum)
 
 
+def stop_again(unraisable: sys.UnraisableHookArgs) -> None:
+    """``sys.unraisablehook``: a Ctrl-C or stop signal whose exception was raised inside a
+    finalizer (a ``__del__`` that the garbage collector ran, where Python only prints an
+    exception and carries on) is raised again, so that it still stops the run; any other
+    unraisable exception is printed as usual. The signal is sent again from a new thread,
+    which runs once the main thread lets go (at the latest after Python's 5 ms switch
+    interval), by when the finalizer is done: sent from here, it would be raised in here."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        signum = getattr(unraisable.exc_value, "signum", signal.SIGINT)
+        _thread.start_new_thread(_thread.interrupt_main, (signum,))
+    else:
+        sys.__unraisablehook__(unraisable)
+
+
 def interrupted_exit_code(interrupt: KeyboardInterrupt) -> int:
     """The shell's exit code for a run ended by ``interrupt``: 128 + the signal number."""
     return 128 + getattr(interrupt, "signum", signal.SIGINT)
@@ -48,6 +63,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Install the stop-signal handlers, then run the command line."""
     for signum in STOP_SIGNALS:
         signal.signal(signum, _raise_stopped)
+    sys.unraisablehook = stop_again
     try:
         from quadnav.cli.main import main as run_command_line
     except KeyboardInterrupt as interrupt:

@@ -19,16 +19,18 @@ from quadnav.cli.args import (
     resolve_start_goal,
 )
 from quadnav.cli.progress import planning_bar
-from quadnav.files import atomic_output
 from quadnav.planning import PlannerSettings, get_planner, make_problem
 from quadnav.planning import plan as run_planner
 from quadnav.planning.refine import refine
 from quadnav.planning.report import path_csv, plan_summary
 from quadnav.planning.settings import DEFAULT_TIME_LIMIT
+from quadnav.runfolder import replaced_folder
 from quadnav.world import load_world
 
 #: Exit code when the search ends without a path (the input itself was fine).
 EXIT_NO_PATH = 1
+#: The files plan writes (path.csv only with a path).
+PLAN_FILES = ("path.csv", "plan.json", "plan.png")
 
 
 def settings_from(args: argparse.Namespace) -> PlannerSettings:
@@ -54,17 +56,12 @@ def plan(args: argparse.Namespace) -> int:
     raw_length = result.length
     if not args.no_refine:
         result = refine(problem, result)
-    folder.mkdir(parents=True, exist_ok=True)
-    stale_path = folder / "path.csv"
-    if result.solved:
-        with atomic_output(stale_path) as tmp:
-            tmp.write_text(path_csv(result.path))
-    else:
-        stale_path.unlink(missing_ok=True)
-    with atomic_output(folder / "plan.json") as tmp:
-        tmp.write_text(json.dumps(plan_summary(problem, result, settings, raw_length),
-                                  indent=2) + "\n")
-    save_figure(plan_figure(problem, result), folder / "plan.png")
+    with replaced_folder(folder, PLAN_FILES) as staging:
+        if result.solved:
+            (staging / "path.csv").write_text(path_csv(result.path))
+        (staging / "plan.json").write_text(
+            json.dumps(plan_summary(problem, result, settings, raw_length), indent=2) + "\n")
+        save_figure(plan_figure(problem, result), staging / "plan.png")
     _print_summary(problem.world.name, result, raw_length)
     written = ["path.csv"] if result.solved else []
     print("wrote " + ", ".join(str(folder / name) for name in [*written, "plan.json",

@@ -39,6 +39,7 @@ from quadnav.hardware.rc import RC_FULL_SPEED
 from quadnav.hardware.tello_log import LOG_NAME
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
 from quadnav.planning import get_planner
+from quadnav.runfolder import replaced_folder
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
@@ -48,6 +49,8 @@ DEFAULT_ACCELERATION = 1.0
 #: Exit codes besides 0.
 EXIT_FAILED = 1
 EXIT_INTERRUPTED = 130
+#: The files tello fly writes.
+TELLO_FILES = (LOG_NAME, TRACK_FIGURE)
 _EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.STOPPED: EXIT_FAILED,
                Status.REFUSED: EXIT_FAILED, Status.INTERRUPTED: EXIT_INTERRUPTED}
 
@@ -98,7 +101,10 @@ def tello_fly(args: argparse.Namespace) -> int:
     except NoPathError as error:
         print(f"quadnav: tello: {error}", file=sys.stderr)
         return EXIT_FAILED
-    outcome, _ = fly(plan, settings, folder, host=None if args.dry_run else args.host)
+    # The log is written as the flight goes: whatever ends the flight (a safe stop, an
+    # error, Ctrl-C, SIGTERM), the folder gets the new log and, if it was drawn, the figure.
+    with replaced_folder(folder, TELLO_FILES, keep_partial=True) as staging:
+        outcome, _ = fly(plan, settings, staging, host=None if args.dry_run else args.host)
     stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
     print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
     print(f"wrote {folder / LOG_NAME}, {folder / TRACK_FIGURE}")

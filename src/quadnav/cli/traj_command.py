@@ -12,7 +12,7 @@ from quadnav.cli.args import (
     positive_float,
     resolve_margin,
 )
-from quadnav.files import atomic_output
+from quadnav.runfolder import replaced_folder
 from quadnav.trajectory.export import mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import Limits, feasibility
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
@@ -24,6 +24,8 @@ from quadnav.world import load_world
 
 #: Default sample interval of the CSV outputs, s.
 DEFAULT_DT = 0.01
+#: The files traj writes.
+TRAJ_FILES = ("trajectory.csv", "MP.csv", "trajectory.json", "trajectory.png", "states.png")
 
 
 def traj(args: argparse.Namespace) -> int:
@@ -51,21 +53,19 @@ def traj(args: argparse.Namespace) -> int:
         "segment_times": trajectory.segment_times.tolist(), "yaw": settings.yaw.value,
         "info": trajectory.info, "feasibility": report.as_dict(),
     }
-    folder.mkdir(parents=True, exist_ok=True)
-    for name, text in (("trajectory.csv", trajectory_csv(trajectory, args.dt)),
-                       ("MP.csv", mp_csv(trajectory, args.dt)),
-                       ("trajectory.json", json.dumps(summary, indent=2) + "\n")):
-        with atomic_output(folder / name) as tmp:
-            tmp.write_text(text)
-    save_figure(trajectory_3d_figure(world, trajectory, path), folder / "trajectory.png")
-    save_figure(states_figure(trajectory, args.vmax, args.amax), folder / "states.png")
+    with replaced_folder(folder, TRAJ_FILES) as staging:
+        for name, text in (("trajectory.csv", trajectory_csv(trajectory, args.dt)),
+                           ("MP.csv", mp_csv(trajectory, args.dt)),
+                           ("trajectory.json", json.dumps(summary, indent=2) + "\n")):
+            (staging / name).write_text(text)
+        save_figure(trajectory_3d_figure(world, trajectory, path), staging / "trajectory.png")
+        save_figure(states_figure(trajectory, args.vmax, args.amax), staging / "states.png")
     print(f"{world.name}: {trajectory.method} through {len(trajectory.waypoints)} waypoints "
           f"({len(path)} in the path), {trajectory.duration:.2f} s")
     print(report.summary())
     print(f"  margin kept {kept:.3g} m (asked {space.margin:g} m)" + (
         "" if kept_on_legs is None else f", {kept_on_legs:.3g} m on the legs out of it"))
-    print("wrote " + ", ".join(str(folder / n) for n in (
-        "trajectory.csv", "MP.csv", "trajectory.json", "trajectory.png", "states.png")))
+    print("wrote " + ", ".join(str(folder / name) for name in TRAJ_FILES))
     return 0
 
 

@@ -155,8 +155,9 @@ def _summary(run: Run) -> str:
             f"{html.escape(', '.join(parts))}</p>")
 
 
-def run_section(run: Run, number: int) -> str:
-    """The report section of one run (anchor ``run-NUMBER``)."""
+def run_section(run: Run, number: int, folder: Path) -> str:
+    """The report section of one run (anchor ``run-NUMBER``), naming ``folder`` as its
+    folder."""
     m = run.metrics
     world = run.world
     size = " x ".join(f"{extent:g}" for extent in world.extent)
@@ -169,7 +170,7 @@ def run_section(run: Run, number: int) -> str:
                         [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)))
                          for key, value in flatten(run.parameters)], 1)
     return (f'<section id="run-{number}"><h2>Run {number}: {html.escape(m["map"])}</h2>'
-            f'<p class="muted">folder {html.escape(str(run.folder))}; map {size} m with '
+            f'<p class="muted">folder {html.escape(str(folder))}; map {size} m with '
             f"{len(world.blocks)} blocks, start {html.escape(format_value(m['start']))} m, "
             f"goal {html.escape(format_value(m['goal']))} m, margin "
             f"{m['margin_m']:g} m</p>{_summary(run)}"
@@ -195,11 +196,14 @@ def _overview(runs: Sequence[Run]) -> str:
          "max error (cm)"), rows, 1)
 
 
-def report_html(runs: Sequence[Run]) -> str:
-    """The whole report over ``runs`` (at least one) as one HTML document."""
+def report_html(runs: Sequence[Run], shown: Sequence[Path] | None = None) -> str:
+    """The whole report over ``runs`` (at least one) as one HTML document; ``shown``: the
+    folder to name for each run (default: where each was read from)."""
     title = ("quadnav flight report" if len(runs) > 1
              else f"quadnav flight report: {runs[0].metrics['map']}")
-    sections = "".join(run_section(run, k) for k, run in enumerate(runs, start=1))
+    folders = shown or [run.folder for run in runs]
+    sections = "".join(run_section(run, k, folder)
+                       for k, (run, folder) in enumerate(zip(runs, folders, strict=True), 1))
     overview = _overview(runs) if len(runs) > 1 else ""
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
             f'<meta name="viewport" content="width=device-width, initial-scale=1">'
@@ -211,11 +215,12 @@ def report_html(runs: Sequence[Run]) -> str:
             f"{overview}{sections}</main></body></html>\n")
 
 
-def write_report(runs: Sequence[Run], path: str | Path) -> Path:
-    """Write :func:`report_html` of ``runs`` to ``path`` (.html), whole or not at all;
-    returns the path. QuadnavError for a bad path."""
+def write_report(runs: Sequence[Run], path: str | Path,
+                 shown: Sequence[Path] | None = None) -> Path:
+    """Write :func:`report_html` of ``runs`` (folders named as ``shown``) to ``path``
+    (.html), whole or not at all; returns the path. QuadnavError for a bad path."""
     path = check_report_path(path)
-    text = report_html(runs)
+    text = report_html(runs, shown)
     with atomic_output(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return path

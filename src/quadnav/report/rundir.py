@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import QuadnavError
-from quadnav.files import atomic_output
 from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
 from quadnav.planning.result import tree_edges
+from quadnav.runfolder import replaced_folder
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
 from quadnav.trajectory.model import Samples
@@ -48,17 +48,32 @@ REPORT = "report.html"
 VIEW_PAGE = "view.html"
 #: Files written only when there is a path.
 FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
+#: Every file a run folder can hold.
+RUN_FILES = ("metrics.json", "parameters.json", "map.json", "tree.csv", *FLIGHT_FILES,
+             *FIGURES, REPORT, VIEW_PAGE)
 TREE_HEADER = "x,y,z,parent"
 
 
-def write_run(mission: Mission, folder: Path, figures: bool = True,
+def write_run(mission: Mission, folder: str | Path, figures: bool = True,
               html: bool = False) -> list[str]:
-    """Write the run folder of ``mission`` (created if needed); returns the names written.
+    """Write the run folder of ``mission`` (created if needed), whole or not at all
+    (:func:`~quadnav.runfolder.replaced_folder`); returns the names written.
 
-    The text files are written first; the folder is then read back once (:func:`read_run`)
-    and, with ``figures``, the figures and the report are drawn from it, as every other
-    consumer draws them; with ``html``, the interactive page too. Files of an earlier run
-    that this one does not write are removed, so the folder never mixes two runs."""
+    The text files are written first; the new files are then read back once
+    (:func:`read_run`) and, with ``figures``, the figures and the report are drawn from
+    them, as every other consumer draws them; with ``html``, the interactive page too. All
+    of them reach ``folder`` together at the end, and the files of an earlier run that this
+    one does not write are removed then, so the folder never mixes two runs; an interrupted
+    or failed write leaves it as it was."""
+    folder = Path(folder)
+    with replaced_folder(folder, RUN_FILES) as staging:
+        return _write_files(mission, staging, folder, figures, html)
+
+
+def _write_files(mission: Mission, staging: Path, folder: Path, figures: bool,
+                 html: bool) -> list[str]:
+    """Write the files of :func:`write_run` into the empty ``staging`` folder; the report
+    names ``folder`` as the run's."""
     problem = mission.problem
     world = problem.world.replace(start=problem.start, goal=problem.goal,
                                   margin=problem.margin)
@@ -74,17 +89,12 @@ def write_run(mission: Mission, folder: Path, figures: bool = True,
         texts["path.csv"] = path_csv(plan.path)
         texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
         texts["flight.csv"] = flight_csv(mission.flight)
-    folder.mkdir(parents=True, exist_ok=True)
-    for name in (*FLIGHT_FILES, *FIGURES, REPORT, VIEW_PAGE):
-        if name not in texts:
-            (folder / name).unlink(missing_ok=True)
     for name, text in texts.items():
-        with atomic_output(folder / name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        (staging / name).write_text(text, encoding="utf-8")
     written = list(texts)
     if not (figures or html):
         return written
-    run = read_run(folder)
+    run = read_run(staging)
     if figures:
         from quadnav.report.html_report import write_report
         from quadnav.viz.figures import save_figure
@@ -92,13 +102,13 @@ def write_run(mission: Mission, folder: Path, figures: bool = True,
 
         makers = figure_makers(run)
         for name, make in makers.items():
-            save_figure(make(run), folder / name)
-        write_report([run], folder / REPORT)
+            save_figure(make(run), staging / name)
+        write_report([run], staging / REPORT, shown=[folder])
         written += [*makers, REPORT]
     if html:
         from quadnav.viz.html_viewer import write_viewer
 
-        write_viewer(run, folder / VIEW_PAGE)
+        write_viewer(run, staging / VIEW_PAGE)
         written.append(VIEW_PAGE)
     return written
 
