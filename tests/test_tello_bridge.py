@@ -31,7 +31,7 @@ from tellotools import (
 
 from quadnav.cli.tello_fly_command import ipv4, percent, tello_speed
 from quadnav.hardware import sdk
-from quadnav.hardware.bridge import BridgeSettings, Status, fly
+from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, Status, fly
 from quadnav.hardware.dead_reckoning import DeadReckoning, clip_step
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, TRACKING_ALLOWANCE, plan_flight
 from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body, to_cm, to_m
@@ -307,7 +307,7 @@ def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, t
     # their sum is the trajectory's way (takeoff frame, yaw 0: right = -y) ...
     velocities = np.array([stick_velocity(s, 0.0) for s in sticks])
     flown = plan.takeoff_point + np.cumsum(velocities, axis=0) / 20
-    assert np.allclose(flown[-1, :2], plan.route[-1, :2], atol=0.02)
+    assert np.linalg.norm(flown[-1, :2] - plan.route[-1, :2]) <= GOAL_TOLERANCE
     # ... and a link lost after any one of them leaves the drone inside the fence, which
     # slows the flight down: 0.5 m/s is too fast for 15 s near the course's walls.
     bound = LostLinkBound(plan.fence)

@@ -14,7 +14,8 @@ refused and nothing flies); ``takeoff``; then
   bounded so that a link lost right after it cannot carry the drone out of the geofence
   (:mod:`quadnav.hardware.lost_link`; the trajectory is followed more slowly where that
   bound bites), until the estimate is within :data:`GOAL_TOLERANCE` of the trajectory's
-  end (or :data:`RC_SETTLE` s after it); then the sticks are centred;
+  end horizontally (the landing is straight down), or :data:`RC_SETTLE` s after it; then
+  the sticks are centred;
 
 then ``land``. **Safe stop**: a reply overdue by more than the link timeout, no state
 packet for that long, a refused command, a dead-reckoned position outside the geofence
@@ -87,7 +88,8 @@ MOVE_SETTLE = 3.0
 #: ``rc`` mode: stick updates per drone second, and the position correction's gain, 1/s.
 RC_RATE = 20.0
 RC_GAIN = 1.0
-#: ``rc`` mode ends once the estimate is this close to the trajectory's end, m ...
+#: ``rc`` mode ends once the estimate is this close to the trajectory's end horizontally,
+#: m ...
 GOAL_TOLERANCE = 0.05
 #: ... or this many drone seconds after the trajectory's end.
 RC_SETTLE = 3.0
@@ -287,7 +289,7 @@ class _Flight:
                 raise GeofenceError(f"geofence: the dead-reckoned position "
                                     f"{format_point(position)} left the fence at "
                                     f"t = {t:.1f} s")
-            miss = float(np.linalg.norm(position - end))
+            miss = float(np.linalg.norm((position - end)[:2]))  # the landing is vertical
             if tau >= trajectory.duration:
                 finished = t if finished is None else finished
                 if miss <= GOAL_TOLERANCE or t >= finished + RC_SETTLE:
@@ -308,7 +310,7 @@ class _Flight:
         self.estimator.expect(None)
         return (f"{ticks} rc commands over {t:.1f} s (the trajectory takes "
                 f"{trajectory.duration:.1f} s; slowed where a lost link could otherwise "
-                f"leave the geofence; estimate {100 * miss:.0f} cm from its end)")
+                f"leave the geofence; estimate {100 * miss:.0f} cm beside its end)")
 
     def _check_battery(self) -> None:
         """AutoLandingError if the state packets say the battery is below the level at
