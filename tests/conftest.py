@@ -41,3 +41,12 @@ def client_ns():
     namespace = djitellopy_namespace()
     yield namespace
     namespace.close()
+
+
+@pytest.fixture
+def course(shared_maps):
+    """The RBE595 Tello course map, its start and goal, and their planned flight
+    (:func:`tellotools.planned_course`); skips without the corpus."""
+    from tellotools import planned_course
+
+    return planned_course(shared_maps)

@@ -1,11 +1,9 @@
 """``quadnav tello fly``: frames, ``go`` moves, the geofence, rc sticks, dry runs, and whole
-missions flown by the real djitellopy client against the Tello emulator.
+missions flown by the real djitellopy client against the Tello emulator (see
+:mod:`tellotools`; faults are in ``test_tello_faults.py``).
 
-The emulator runs ``time_scale`` times faster than real time (10 for ``go`` moves, 5 for
-``rc``, whose feedback needs the state packets, which come ten times a wall-clock
-second). djitellopy's sockets live in a network namespace private to this process
-(:func:`djitellopy_namespace`), so parallel workers never share port 8889. What the drone
-really did is read from the emulator: its track (world frame) and the commands it heard.
+The emulator runs ten times faster than real time; the ``rc`` feedback still gets a state
+packet every emulated second, enough for the dead reckoning at the bounded stick speeds.
 """
 
 from __future__ import annotations
@@ -14,25 +12,31 @@ import argparse
 import io
 import json
 import math
-import signal
-import subprocess
-import time
-from functools import cache
-from pathlib import Path
 
 import numpy as np
 import pytest
-from clitools import QUADNAV, assert_user_error, run
+from clitools import assert_user_error, run
 from hypothesis import given
 from hypothesis import strategies as st
+from tellotools import (
+    MAP,
+    MARGIN,
+    START_GOAL,
+    assert_kept_the_fence,
+    assert_on_the_floor,
+    emulated_flight,
+    needs_netns,
+    planned_room,
+)
 
 from quadnav.cli.tello_fly_command import ipv4, percent, tello_speed
 from quadnav.hardware import sdk
-from quadnav.hardware.bridge import BridgeSettings, Status, fly
+from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, Status, fly
 from quadnav.hardware.dead_reckoning import DeadReckoning, clip_step
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, TRACKING_ALLOWANCE, plan_flight
 from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body, to_cm, to_m
 from quadnav.hardware.geofence import Geofence, GeofenceError
+from quadnav.hardware.lost_link import LostLinkBound
 from quadnav.hardware.moves import (
     DETOUR_CM,
     GO_MAX_CM,
@@ -42,17 +46,15 @@ from quadnav.hardware.moves import (
     go_speed,
     is_long_enough,
 )
-from quadnav.hardware.netns import NetNamespace, unavailable_reason
-from quadnav.hardware.rc import RC_FULL_SPEED, StickRounder, stick_values, tracking_velocity
-from quadnav.planning import PlannerSettings
-from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.world import World, load_world, read_start_goal
+from quadnav.hardware.rc import (
+    RC_FULL_SPEED,
+    StickRounder,
+    stick_values,
+    stick_velocity,
+    tracking_velocity,
+)
+from quadnav.world import World
 
-MAP = "rbe595/p2b_map1.txt"
-START_GOAL = "rbe595/p2b_startandgoal_map1.txt"
-MARGIN = 0.2
-NO_NETNS = unavailable_reason()
-needs_netns = pytest.mark.skipif(NO_NETNS is not None, reason=NO_NETNS or "")
 ALWAYS = lambda start, end: True  # noqa: E731  (a geofence that allows every move)
 
 
@@ -207,6 +209,13 @@ def test_rc_sticks_are_percent_of_full_speed_with_the_sdk_signs():
     sent = np.array([rounder([0.4, -12.7, 150.0]) for _ in range(10)])
     assert sent[:, 0].sum() == 4 and sent[:, 1].sum() == -127  # rounding errors carried
     assert (sent[:, 2] == 100).all() and (sent[:, 3] == 0).all()  # clamped; no yaw
+    for yaw in (0.0, 1.0):
+        assert np.allclose(stick_velocity(stick_values([0.3, -0.2, 0.1], yaw), yaw),
+                           [0.3, -0.2, 0.1])
+    # Sticks not allowed (the lost-link bound): as few axes as need be go towards zero.
+    no_climb = StickRounder()
+    assert no_climb([3.6, 2.2, 0.7], lambda s: s[2] == 0) == (4, 2, 0, 0)
+    assert no_climb([3.6, 2.2, 0.7], lambda s: False) == (0, 0, 0, 0)
 
 
 def test_tracking_velocity_corrects_towards_the_reference_and_is_capped():
@@ -232,24 +241,6 @@ def test_dead_reckoning_keeps_within_what_the_reports_allow():
 
 
 # --- the plan ----------------------------------------------------------------------------
-
-
-@cache
-def planned_course(folder: Path):
-    """The RBE595 course map, its start and goal, and their planned flight (yaw 0), planned
-    once per test process."""
-    world = load_world(folder / MAP)
-    start, goal = read_start_goal(folder / START_GOAL)
-    plan = plan_flight(world, start, goal, MARGIN, 0.0,
-                       planning=PlannerSettings(seed=0, max_iterations=50_000, time_limit=10),
-                       trajectory=TrajectorySettings(v_max=0.5, a_max=1.0))
-    return world, start, goal, plan
-
-
-@pytest.fixture
-def course(shared_maps):
-    """:func:`planned_course` on the public corpus (skips without it)."""
-    return planned_course(shared_maps)
 
 
 def test_the_plan_takes_off_under_the_start_and_lands_under_the_goal(course):
@@ -301,7 +292,7 @@ def test_cli_dry_run_prints_every_command_and_sends_nothing(shared_maps, tmp_pat
     assert (tmp_path / "tello_track.png").stat().st_size > 0
 
 
-def test_rc_dry_run_streams_sticks_at_20_hz(course, tmp_path):
+def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, tmp_path):
     *_, plan = course
     out = io.StringIO()
     outcome, track = fly(plan, BridgeSettings(mode="rc"), tmp_path, stream=out)
@@ -309,12 +300,22 @@ def test_rc_dry_run_streams_sticks_at_20_hz(course, tmp_path):
     lines = out.getvalue().splitlines()
     sticks = np.array([[int(v) for v in line.split()[1:]] for line in lines[2:-1]])
     assert lines[:2] == ["command", "takeoff"] and lines[-1] == "land"
-    assert len(sticks) >= 20 * plan.trajectory.duration
     assert np.abs(sticks).max() <= 100 and (sticks[:, 3] == 0).all()
-    # The sticks' sum is the trajectory's way, in the takeoff frame (yaw 0: right = -y).
-    way = plan.route[-1] - plan.takeoff_point
-    assert sticks[:, 1].sum() * RC_FULL_SPEED / 100 / 20 == pytest.approx(way[0], abs=0.02)
-    assert -sticks[:, 0].sum() * RC_FULL_SPEED / 100 / 20 == pytest.approx(way[1], abs=0.02)
+    seconds = float(outcome.message.split(" rc commands over ")[1].split()[0])
+    assert len(sticks) == pytest.approx(20 * seconds, abs=2)  # 20 a second (t to 0.1 s)
+    # A dry run's drone flies the sticks exactly, from the takeoff point, 20 a second:
+    # their sum is the trajectory's way (takeoff frame, yaw 0: right = -y) ...
+    velocities = np.array([stick_velocity(s, 0.0) for s in sticks])
+    flown = plan.takeoff_point + np.cumsum(velocities, axis=0) / 20
+    assert np.linalg.norm(flown[-1, :2] - plan.route[-1, :2]) <= GOAL_TOLERANCE
+    # ... and a link lost after any one of them leaves the drone inside the fence, which
+    # slows the flight down: 0.5 m/s is too fast for 15 s near the course's walls.
+    bound = LostLinkBound(plan.fence)
+    starts = np.vstack([plan.takeoff_point, flown[:-1]])
+    assert all(bound.is_safe(p, v) for p, v in zip(starts, velocities, strict=True))
+    assert not bound.is_safe(plan.takeoff_point, [0.0, 0.5, 0.0])
+    assert 2 * plan.trajectory.duration < len(sticks) / 20 < 4 * plan.trajectory.duration
+    assert "slowed where a lost link could otherwise leave the geofence" in outcome.message
 
 
 def test_cli_bad_flags_are_one_line_errors(tmp_path):
@@ -340,51 +341,21 @@ def test_cli_refuses_a_plan_outside_the_fence(tmp_path):
 # --- the real client against the emulator --------------------------------------------------
 
 
-def emulated_flight(course, client_ns, folder, mode="waypoints", scale=10.0, **emulator):
-    """Fly the course on an emulator; returns the outcome, the dead-reckoned track and the
-    emulator (stopped) once the drone has come to rest."""
-    from quadnav.hardware.emulator import TelloEmulator
-
-    _, start, _, plan = course
-    with TelloEmulator(start=tuple(start), time_scale=scale, client_netns=client_ns,
-                       **emulator) as drone:
-        outcome, track = fly(plan, BridgeSettings(mode=mode, time_scale=scale), folder,
-                             host=drone.host, truth=lambda: drone.track()[1])
-        deadline = time.monotonic() + 5.0
-        while drone.flying() and time.monotonic() < deadline:  # e.g. landing by itself
-            time.sleep(0.02)
-    return outcome, track, drone
-
-
-def assert_kept_the_fence(plan, positions):
-    """Every position (N, 3) is inside the fence, or in the column of the takeoff or of
-    the landing (which a safe stop makes where the drone is), and no block was touched."""
-    fence = plan.fence
-    on_columns = np.zeros(len(positions), dtype=bool)
-    for ground in (plan.takeoff_ground, positions[-1]):
-        on_columns |= np.linalg.norm(positions[:, :2] - ground[:2], axis=1) < 0.05
-    inside = fence.contains(positions)
-    assert (inside | on_columns).all(), positions[~(inside | on_columns)][:5]
-    walls = fence.world.replace(boundary=fence.world.boundary + np.repeat([-1.0, 1.0], 3))
-    assert walls.clearances(positions).min() >= MARGIN  # no block touched, margin kept
-
-
-def assert_landed(drone, where):
-    _, positions = drone.track()
-    assert not drone.flying()
-    assert positions[-1, 2] == pytest.approx(0.0, abs=1e-6)
-    assert np.linalg.norm(positions[-1, :2] - np.asarray(where)[:2]) < 0.05
-
-
 @needs_netns
-@pytest.mark.parametrize(("mode", "scale"), [("waypoints", 10.0), ("rc", 5.0)])
-def test_whole_mission_on_the_emulator(course, client_ns, tmp_path, mode, scale):
-    *_, goal, plan = course
-    outcome, track, drone = emulated_flight(course, client_ns, tmp_path, mode, scale)
+@pytest.mark.parametrize("mode", ["waypoints", "rc"])
+def test_whole_mission_on_the_emulator(request, client_ns, tmp_path, mode):
+    # rc on the course takes 84 s of drone time (its dry run above): the room's is shorter,
+    # and flown at half the time scale, as the rc feedback runs at 20 Hz of drone time.
+    if mode == "waypoints":
+        *_, plan = request.getfixturevalue("course")
+        scale = 10.0
+    else:
+        plan, scale = planned_room(), 5.0
+    outcome, track, drone = emulated_flight(plan, client_ns, tmp_path, mode, scale)
     assert outcome.status is Status.LANDED, outcome.message
     _, positions = drone.track()
     assert_kept_the_fence(plan, positions)
-    assert_landed(drone, goal)
+    assert_on_the_floor(drone, plan.landing_ground)
     assert positions[:, 2].max() == pytest.approx(TAKEOFF_HEIGHT, abs=0.03)
     heard = drone.commands_received()
     names = [text.split()[0] for _, text in heard]
@@ -392,8 +363,7 @@ def test_whole_mission_on_the_emulator(course, client_ns, tmp_path, mode, scale)
     if mode == "waypoints":
         assert set(names[2:-1]) == {"go"}
     else:
-        times = [when for when, text in heard if text.startswith("rc")]
-        assert len(times) / (times[-1] - times[0]) >= 19.5  # at least 20 Hz, drone time
+        # (The 20 Hz schedule is checked by the dry run: here a busy machine may delay it.)
         # The dead-reckoned estimate followed the emulated drone to within a few cm.
         assert np.linalg.norm(track[-1, 1:3] - positions[-1, :2]) < 0.05
     records = [json.loads(line) for line in (tmp_path / "tello_log.jsonl").open()]
@@ -402,61 +372,3 @@ def test_whole_mission_on_the_emulator(course, client_ns, tmp_path, mode, scale)
     assert [r["text"] for r in records if r["kind"] == "command"] == [c for _, c in heard]
     assert np.all(np.diff([r["t"] for r in records]) >= 0)
     assert (tmp_path / "tello_track.png").stat().st_size > 0
-
-
-@needs_netns
-@pytest.mark.parametrize(("faults", "fragments", "airborne"), [
-    ({"drop_replies": 0.2}, ["no reply to 'go", "safe stop: stopped, landed"], True),
-    ({"reply_delay_s": 1.5}, ["no reply to '", "safe stop: stopped, landed"], True),
-    ({"dead_after_s": 1.5}, ["no state packet for 1 s", "the link is down"], True),
-    ({"battery": 15.0}, ["battery 15 % is below the 20 %", "takeoff refused"], False),
-])
-def test_each_fault_ends_in_a_safe_stop(course, client_ns, tmp_path, faults, fragments,
-                                         airborne):
-    from quadnav.hardware.emulator import Faults
-
-    *_, plan = course
-    outcome, _, drone = emulated_flight(course, client_ns, tmp_path, faults=Faults(**faults))
-    assert outcome.status is (Status.STOPPED if airborne else Status.REFUSED)
-    for fragment in fragments:
-        assert fragment in outcome.message, outcome.message
-    _, positions = drone.track()
-    assert_kept_the_fence(plan, positions)
-    assert not drone.flying() and positions[-1, 2] == pytest.approx(0.0, abs=1e-6)
-    heard = [text for _, text in drone.commands_received()]
-    if not airborne:
-        assert heard == ["command"] and positions[:, 2].max() == 0.0
-    elif "dead_after_s" not in faults:
-        assert heard[-2:] == ["stop", "land"]  # heard and obeyed
-    events = [json.loads(line) for line in (tmp_path / "tello_log.jsonl").open()]
-    assert any(r["kind"] == "event" and outcome.message in r["text"] for r in events)
-
-
-@needs_netns
-def test_cli_ctrl_c_stops_and_lands(shared_maps, tmp_path):
-    from quadnav.hardware.emulator import TelloEmulator
-
-    start, _ = read_start_goal(shared_maps / START_GOAL)
-    host = "198.18.69.1"
-    with NetNamespace.create() as namespace, TelloEmulator(
-            host=host, start=tuple(start), time_scale=10.0, client_netns=namespace) as drone:
-        process = namespace.call(lambda: subprocess.Popen(
-            [*QUADNAV, "tello", "fly", str(shared_maps / MAP), "--start-goal",
-             str(shared_maps / START_GOAL), "--host", host, "--time-scale", "10", "--quiet",
-             "-o", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
-        try:
-            deadline = time.monotonic() + 60
-            while not any(c.startswith("go") for _, c in drone.commands_received()):
-                assert time.monotonic() < deadline and process.poll() is None
-                time.sleep(0.01)
-        finally:
-            process.send_signal(signal.SIGINT)
-            _, err = process.communicate(timeout=30)
-        deadline = time.monotonic() + 5.0
-        while drone.flying() and time.monotonic() < deadline:
-            time.sleep(0.02)
-        heard = [c for _, c in drone.commands_received()]
-        assert process.returncode == 130, err
-        assert "interrupted (Ctrl-C); safe stop: stopped, landed" in err
-        assert heard[-2:] == ["stop", "land"] and not drone.flying()
-        assert (tmp_path / "tello_log.jsonl").exists()

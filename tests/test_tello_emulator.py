@@ -168,6 +168,8 @@ def test_bad_emulator_settings_are_user_errors():
         check_host("drone")
     with pytest.raises(QuadnavError, match="drop_replies"):
         Faults(drop_replies=1.5)
+    with pytest.raises(QuadnavError, match=r"battery_drain 0\.5: expected 1 to 1000"):
+        Faults(battery_drain=0.5)
     with pytest.raises(QuadnavError, match="time scale"):
         TelloEmulator(time_scale=0)
     assert peer_address("198.18.67.1") == "198.18.67.0"
@@ -341,11 +343,18 @@ def test_low_battery(emulate):
 
 @needs_netns
 def test_battery_running_low_in_flight_lands(emulate):
-    emulator, tello = emulate(time_scale=10.0, faults=Faults(battery=10.6))
+    # An aged battery (draining 20 times faster) runs from 12 % to below 10 % in flight.
+    emulator, tello = emulate(time_scale=5.0, faults=Faults(battery=12, battery_drain=20))
     tello.connect()
     tello.takeoff()
-    assert wait_for(lambda: tello.get_height() == 0 and tello.get_battery() == 9, timeout=5.0)
-    assert emulator.commands_received()[-1][1] == "takeoff"  # it landed by itself
+    assert wait_for(lambda: tello.get_battery() < 10, timeout=5.0)
+    assert tello.get_height() > 50  # it is landing by itself: refusals say so
+    assert tello.send_command_with_return("forward 50") == AUTO_LANDING
+    assert tello.send_command_with_return("stop") == AUTO_LANDING
+    assert tello.send_command_with_return("land") == AUTO_LANDING
+    assert wait_for(lambda: tello.get_height() == 0 and not emulator.flying(), timeout=5.0)
+    assert tello.send_command_with_return("land") == NOT_FLYING
+    assert [c for _, c in emulator.commands_received()][:2] == ["command", "takeoff"]
 
 
 @needs_netns

@@ -1,8 +1,11 @@
 """``quadnav tello fly``: plan like ``quadnav fly``, check, and fly it on a Tello.
 
 Exit codes: 0 landed at the goal (or a dry run printed); 1 no path, a safe stop (lost
-link, refused command, geofence) or a refused takeoff (low battery); 2 bad input,
-including a plan that would leave the geofence; 130 Ctrl-C (after the safe stop).
+replies, refused command, geofence) with the drone on the floor, a landing by itself (low
+battery) or a refused takeoff (low battery); 2 bad input, including a plan that would
+leave the geofence or that ``rc`` mode cannot fly; 3 a lost link: no landing confirmed;
+128 + the signal after a stop signal (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP), after the safe
+stop.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from quadnav.hardware.bridge import (
     MODES,
     TRACK_FIGURE,
     BridgeSettings,
+    Outcome,
     Status,
     fly,
 )
@@ -46,13 +50,14 @@ from quadnav.world import load_world
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
 DEFAULT_SPEED = 0.5
 DEFAULT_ACCELERATION = 1.0
-#: Exit codes besides 0.
+#: Exit codes besides 0 and 128 + a stop signal.
 EXIT_FAILED = 1
-EXIT_INTERRUPTED = 130
+EXIT_LINK_LOST = 3
 #: The files tello fly writes.
 TELLO_FILES = (LOG_NAME, TRACK_FIGURE)
 _EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.STOPPED: EXIT_FAILED,
-               Status.REFUSED: EXIT_FAILED, Status.INTERRUPTED: EXIT_INTERRUPTED}
+               Status.AUTO_LANDED: EXIT_FAILED, Status.REFUSED: EXIT_FAILED,
+               Status.LINK_LOST: EXIT_LINK_LOST}
 
 
 def tello_speed(text: str) -> float:
@@ -83,6 +88,13 @@ def percent(text: str) -> int:
     return value
 
 
+def exit_code(outcome: Outcome) -> int:
+    """The exit code of a flight that ended with ``outcome`` (see the module)."""
+    if outcome.signum is not None:
+        return 128 + outcome.signum
+    return _EXIT_CODES[outcome.status]
+
+
 def tello_fly(args: argparse.Namespace) -> int:
     """Plan, check and fly (or print) the mission; the exit code says how it ended."""
     get_planner(args.planner)
@@ -108,7 +120,7 @@ def tello_fly(args: argparse.Namespace) -> int:
     stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
     print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
     print(f"wrote {folder / LOG_NAME}, {folder / TRACK_FIGURE}")
-    return _EXIT_CODES[outcome.status]
+    return exit_code(outcome)
 
 
 def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
@@ -119,13 +131,18 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     f"{TRACKING_ALLOWANCE:g} m; check every move against the geofence (the "
                     "map shrunk by the margin); then take off from the floor under the "
                     "start (the drone facing --yaw), fly it with 'go' moves (waypoints) or "
-                    "'rc' sticks following the trajectory (rc), and land on the floor under "
-                    "the goal. Below --min-battery the takeoff is refused; a lost link (no "
-                    "reply or state for 1 s), a refused command or Ctrl-C stop the drone "
-                    f"and land it. Writes DIR/{LOG_NAME} (every command, reply and state "
+                    "'rc' sticks following the trajectory (rc; each stick slow enough that "
+                    "a link lost for the Tello's 15 s keeps the drone inside the geofence), "
+                    "and land on the floor under the goal. Below --min-battery, or too low "
+                    "for the flight, the takeoff is refused; no reply or state for 1 s, a "
+                    "refused command, Ctrl-C, SIGTERM or SIGHUP stop the drone and land it; "
+                    "below 10 % battery in flight the Tello lands by itself and the bridge "
+                    f"waits for it. Writes DIR/{LOG_NAME} (every command, reply and state "
                     f"packet) and DIR/{TRACK_FIGURE} (planned against flown). Exit 0 when "
-                    "landed at the goal, 1 on a safe stop, a refused takeoff or no path, 2 "
-                    "on bad input, 130 on Ctrl-C.")
+                    "landed at the goal; 1 on a safe stop, a landing by itself, a refused "
+                    "takeoff or no path; 2 on bad input; 3 when the link was lost and no "
+                    "landing was confirmed; 128 + the signal (130 Ctrl-C, 143 SIGTERM, 129 "
+                    "SIGHUP) after a stop signal.")
     add_map_argument(p)
     add_start_goal_arguments(p)
     add_margin_argument(p)

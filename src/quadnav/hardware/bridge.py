@@ -2,31 +2,44 @@
 printing every command a flight would send.
 
 The sequence: ``command`` and the first state packet; the battery check (below
-``min_battery`` percent the takeoff is refused and nothing flies); ``takeoff``; then
+``min_battery`` percent, or too low for the flight's expected time, the takeoff is
+refused and nothing flies); ``takeoff``; then
 
 * ``waypoints`` mode: the ``go`` moves through the pruned route, made from the height the
   drone reports after takeoff (it is only *about* 0.8 m), each sent once the one before
   has answered ``ok``;
 * ``rc`` mode: ``rc`` sticks at ``rc_rate`` Hz (drone time) from the trajectory's
-  velocity plus a correction towards its position from the dead-reckoned estimate (see
-  :mod:`quadnav.hardware.rc`), until the estimate is within :data:`GOAL_TOLERANCE` of the
-  trajectory's end (or :data:`RC_SETTLE` s after it); then the sticks are centred;
+  velocity plus a correction towards its position from the dead-reckoned estimate (a
+  dry run's drone flies the sticks exactly; see :mod:`quadnav.hardware.rc`), each
+  bounded so that a link lost right after it cannot carry the drone out of the geofence
+  (:mod:`quadnav.hardware.lost_link`; the trajectory is followed more slowly where that
+  bound bites), until the estimate is within :data:`GOAL_TOLERANCE` of the trajectory's
+  end horizontally (the landing is straight down), or :data:`RC_SETTLE` s after it; then
+  the sticks are centred;
 
 then ``land``. **Safe stop**: a reply overdue by more than the link timeout, no state
 packet for that long, a refused command, a dead-reckoned position outside the geofence
-(``rc``) or Ctrl-C centre the sticks, send ``stop`` (hover) and then ``land``, resent up
-to :data:`LAND_ATTEMPTS` times; a landing counts as confirmed by its ``ok`` or by a state
-packet with the drone on the floor.
+(``rc``) or a stop signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop``
+(hover) and then ``land``, resent up to three times; a landing counts as confirmed by
+its ``ok`` or by a state packet with the drone on the floor
+(:mod:`quadnav.hardware.landing`). Once the landing has begun, further stop signals are
+held until it is over (:mod:`quadnav.hardware.stop_signals`). **Landing by itself**: the
+reply ``error Auto land``, or a battery below :data:`~quadnav.hardware.sdk.LOW_BATTERY`
+percent in flight, means the Tello lands (or is about to) by itself: the bridge sends
+``land`` once and waits for the state packets to show it on the floor. A landing that is
+never confirmed is a **lost link**: the outcome says what the drone does if it heard
+nothing more (it lands by itself 15 s after the last command it heard).
 
 Time: the drone's seconds are the wall clock's times ``time_scale`` (1 for a real drone;
-the emulator's scale in tests), see :class:`Clock`; the link timeout is wall-clock.
+the emulator's scale in tests), see :class:`~quadnav.hardware.drone_clock.Clock`; the
+link timeout is wall-clock.
 """
 
 from __future__ import annotations
 
 import logging
+import signal
 import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
@@ -37,18 +50,24 @@ import numpy as np
 
 from quadnav.errors import QuadnavError
 from quadnav.hardware.dead_reckoning import DeadReckoning
+from quadnav.hardware.drone_clock import Clock, VirtualClock
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
 from quadnav.hardware.frames import FloatArray
 from quadnav.hardware.geofence import GeofenceError
+from quadnav.hardware.landing import Lander
 from quadnav.hardware.link import (
     LINK_TIMEOUT,
+    AutoLandingError,
     CommandRefusedError,
     DryRunLink,
     Link,
     LinkLostError,
 )
+from quadnav.hardware.lost_link import HOLD, LostLinkBound, SlowedFlight, slowed_flight
 from quadnav.hardware.moves import MoveError, go_speed
-from quadnav.hardware.rc import StickRounder, stick_values, tracking_velocity
+from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
+from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
+from quadnav.hardware.stop_signals import StopSignals, signal_name, signal_of
 from quadnav.hardware.tello_log import LOG_NAME, TelloLog, open_log
 from quadnav.world.placement import format_point
 
@@ -56,10 +75,12 @@ from quadnav.world.placement import format_point
 MODES = ("waypoints", "rc")
 #: Least battery, percent, to take off with.
 MIN_BATTERY = 20
-#: Drone seconds a takeoff, a landing and a ``stop`` may take before the reply is due.
+#: Drone seconds a full battery flies (a Tello's is about 13 minutes), and the flight
+#: time a takeoff and a landing take together, for the battery check.
+BATTERY_FLIGHT_TIME = 720.0
+TAKEOFF_AND_LANDING = 10.0
+#: Drone seconds a takeoff may take before the reply is due.
 TAKEOFF_TIME = 10.0
-LAND_TIME = 10.0
-STOP_TIME = 2.0
 #: A ``go`` move's reply is due after MOVE_FACTOR times its length over its speed plus
 #: MOVE_SETTLE drone seconds (speed ramps, settling).
 MOVE_FACTOR = 1.25
@@ -67,16 +88,13 @@ MOVE_SETTLE = 3.0
 #: ``rc`` mode: stick updates per drone second, and the position correction's gain, 1/s.
 RC_RATE = 20.0
 RC_GAIN = 1.0
-#: ``rc`` mode ends once the estimate is this close to the trajectory's end, m ...
+#: ``rc`` mode ends once the estimate is this close to the trajectory's end horizontally,
+#: m ...
 GOAL_TOLERANCE = 0.05
 #: ... or this many drone seconds after the trajectory's end.
 RC_SETTLE = 3.0
 #: djitellopy drops an ``rc`` command sent within 1 ms of the last: the highest rate, Hz.
 MAX_RC_WALL_RATE = 500.0
-#: How many times a safe stop sends ``land``.
-LAND_ATTEMPTS = 3
-#: A reported height at or below this counts as on the floor, cm.
-LANDED_HEIGHT_CM = 5
 #: File name of the figure of the flight in the output folder.
 TRACK_FIGURE = "tello_track.png"
 
@@ -84,19 +102,23 @@ TRACK_FIGURE = "tello_track.png"
 class Status(Enum):
     """How a flight ended."""
 
-    LANDED = "landed"            # flown to the end and landed
-    STOPPED = "stopped"          # a fault: safe stop and landing
-    REFUSED = "refused"          # takeoff refused: nothing flown
-    INTERRUPTED = "interrupted"  # Ctrl-C: safe stop and landing
-    DRY_RUN = "dry run"          # printed, nothing sent
+    LANDED = "landed"                 # flown to the end and landed
+    STOPPED = "stopped"               # a fault: safe stop, on the floor
+    AUTO_LANDED = "landed by itself"  # low battery: the Tello landed by itself
+    LINK_LOST = "link lost"           # no landing confirmed: the drone's end is not known
+    REFUSED = "refused"               # takeoff refused: nothing flown
+    INTERRUPTED = "interrupted"       # a stop signal: safe stop and landing
+    DRY_RUN = "dry run"               # printed, nothing sent
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a flight ended, and one line saying so."""
+    """How a flight ended, and one line saying so; ``signum``: the stop signal that
+    ended it (:attr:`Status.INTERRUPTED`), else None."""
 
     status: Status
     message: str
+    signum: int | None = None
 
 
 @dataclass(frozen=True)
@@ -138,162 +160,222 @@ class BridgeSettings:
                 raise QuadnavError(message)
 
 
-class Clock:
-    """Drone time: seconds since the clock was made, times ``time_scale``."""
-
-    def __init__(self, time_scale: float = 1.0) -> None:
-        self.time_scale = time_scale
-        self._began = time.monotonic()
-
-    def now(self) -> float:
-        """Drone seconds since the start."""
-        return self.time_scale * (time.monotonic() - self._began)
-
-    def sleep_until(self, when: float) -> None:
-        """Wait until drone time ``when``."""
-        delay = (when - self.now()) / self.time_scale
-        if delay > 0:
-            time.sleep(delay)
-
-    def wall(self, seconds: float) -> float:
-        """Drone ``seconds`` in wall-clock seconds."""
-        return seconds / self.time_scale
-
-
-class VirtualClock(Clock):
-    """A dry run's clock: waiting moves it on at once."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self._now = 0.0
-
-    def now(self) -> float:
-        """Drone seconds waited so far."""
-        return self._now
-
-    def sleep_until(self, when: float) -> None:
-        """Jump to ``when``."""
-        self._now = max(self._now, when)
+class RcModeError(QuadnavError):
+    """``rc`` mode cannot fly the plan within the lost-link bound; nothing was sent."""
 
 
 class _Flight:
-    """One flight of ``plan`` over ``link`` (see the module's description)."""
+    """One flight of ``plan`` over ``link`` (see the module's description); ``slowed`` is
+    the lost-link bound's pace in ``rc`` mode. ``if_lost`` says what the drone does if
+    the link dies now."""
 
     def __init__(self, plan: FlightPlan, link: Link, estimator: DeadReckoning,
-                 settings: BridgeSettings, clock: Clock, log: TelloLog) -> None:
+                 settings: BridgeSettings, clock: Clock, log: TelloLog,
+                 slowed: SlowedFlight | None, signals: StopSignals) -> None:
         self.plan, self.link, self.estimator = plan, link, estimator
         self.settings, self.clock, self.log = settings, clock, log
+        self.slowed, self.signals = slowed, signals
+        self.lander = Lander(link, estimator, log, self._timeout, settings.link_timeout)
+        self.if_lost = "stays on the floor"
+
+    # --- the sequence ------------------------------------------------------------------
 
     def run(self) -> Outcome:
+        """Fly; the outcome, with the stop signals held during the landing."""
+        outcome = with_held_signals(self._run(), self.signals.take())
+        self.log.event(f"{outcome.status.value}: {outcome.message}")
+        return outcome
+
+    def _run(self) -> Outcome:
+        try:
+            refusal = self._preflight()
+        except KeyboardInterrupt as interrupt:
+            signum = signal_of(interrupt)
+            return Outcome(Status.INTERRUPTED, f"{stopped_by(signum)} before takeoff: "
+                           "nothing was flown", signum)
+        if refusal is not None:
+            return Outcome(Status.REFUSED, refusal)
+        try:
+            self.if_lost = "finishes its takeoff, hovers"
+            self.link.command("takeoff", self._timeout(TAKEOFF_TIME))
+            done = self._follow() if self.settings.mode == "rc" else self._go()
+            self.signals.hold()
+            landing = self.lander.land()
+        except AutoLandingError as error:
+            return self._landed_by_itself(str(error))
+        except (LinkLostError, CommandRefusedError, GeofenceError, MoveError) as error:
+            return self._safe_stop(Status.STOPPED, str(error))
+        except KeyboardInterrupt as interrupt:
+            signum = signal_of(interrupt)
+            return self._safe_stop(Status.INTERRUPTED, stopped_by(signum), signum)
+        where = format_point(self.plan.landing_ground)
+        if not self.link.reports_state:
+            return Outcome(Status.DRY_RUN, f"{done}, then land at {where}; nothing was sent")
+        if not landing.confirmed:
+            return self._link_lost(f"flew {done}, then {landing.text}", Status.LINK_LOST)
+        return Outcome(Status.LANDED, f"landed at {where} after {done}")
+
+    def _preflight(self) -> str | None:
+        """Connect and check the battery: why the takeoff is refused, or None."""
         link, settings = self.link, self.settings
         try:
             link.connect()
         except LinkLostError as error:
-            return self._end(Status.REFUSED, f"{error}: nothing was flown")
-        if link.reports_state:
-            battery = link.get_battery()
-            if battery < settings.min_battery:
-                return self._end(Status.REFUSED, f"battery {battery} % is below the "
-                                 f"{settings.min_battery} % needed: takeoff refused, "
-                                 "nothing was flown")
-        try:
-            link.command("takeoff", self._timeout(TAKEOFF_TIME))
-            done = self._follow() if settings.mode == "rc" else self._go()
-        except (LinkLostError, CommandRefusedError, GeofenceError, MoveError) as error:
-            return self._safe_stop(Status.STOPPED, str(error))
-        except KeyboardInterrupt:
-            return self._safe_stop(Status.INTERRUPTED, "interrupted (Ctrl-C)")
-        where = format_point(self.plan.landing_ground)
-        landed, how = self._land()
+            return f"{error}: nothing was flown"
         if not link.reports_state:
-            return self._end(Status.DRY_RUN, f"{done}, then land at {where}; nothing was "
-                             "sent")
-        if not landed:
-            return self._end(Status.STOPPED, f"flew {done}, then {how}")
-        return self._end(Status.LANDED, f"landed at {where} after {done}")
+            return None
+        battery = link.get_battery()
+        if battery < settings.min_battery:
+            return (f"battery {battery} % is below the {settings.min_battery} % needed: "
+                    "takeoff refused, nothing was flown")
+        lasts = (battery - LOW_BATTERY) / 100.0 * BATTERY_FLIGHT_TIME
+        takes = self._expected_flight_time() + TAKEOFF_AND_LANDING
+        if takes > lasts:
+            slowed = (" (rc sticks slowed so that a lost link keeps the drone inside the "
+                      "geofence)" if self.slowed is not None else "")
+            return (f"battery {battery} % lasts about {max(lasts, 0.0):.0f} s of flight "
+                    f"before the Tello lands by itself at {LOW_BATTERY} %, and this flight "
+                    f"takes about {takes:.0f} s{slowed}: takeoff refused, nothing was flown")
+        return None
+
+    def _expected_flight_time(self) -> float:
+        """Drone seconds from the end of the takeoff to the start of the landing."""
+        if self.slowed is not None:
+            return self.slowed.duration
+        moves = self.plan.go_moves(TAKEOFF_HEIGHT, go_speed(self.plan.speed))
+        return sum(move.duration for move in moves)
 
     def _timeout(self, drone_seconds: float) -> float:
         """Wall-clock seconds to wait for the reply to a command that takes
         ``drone_seconds``."""
         return self.clock.wall(drone_seconds) + self.settings.link_timeout
 
+    # --- flying --------------------------------------------------------------------------
+
     def _go(self) -> str:
         """Fly the ``go`` moves; returns what was done, for the outcome."""
         height = (self.link.get_height() / 100.0 if self.link.reports_state
                   else TAKEOFF_HEIGHT)
         moves = self.plan.go_moves(height, go_speed(self.plan.speed))
+        self.if_lost = "finishes the go move it flies (inside the geofence), hovers"
         for move in moves:
             self.link.command(move.command,
                               self._timeout(MOVE_FACTOR * move.duration + MOVE_SETTLE))
         return f"{len(moves)} go moves"
 
     def _follow(self) -> str:
-        """Follow the trajectory with ``rc`` sticks; returns what was done."""
+        """Follow the trajectory with ``rc`` sticks within the lost-link bound; returns
+        what was done."""
         plan, link, settings, clock = self.plan, self.link, self.settings, self.clock
-        trajectory, period = plan.trajectory, 1.0 / settings.rc_rate
+        self.if_lost = ("flies on at the last sticks it heard (each bounded so that "
+                        f"{HOLD:g} s of them stay inside the geofence)")
+        trajectory, period, yaw = plan.trajectory, 1.0 / settings.rc_rate, plan.frame.yaw
+        end = trajectory.position(trajectory.duration)
+        bound = LostLinkBound(plan.fence)
         rounder = StickRounder()
-        began, ticks = clock.now(), 0
+        began, ticks, tau, pace, t, finished = clock.now(), 0, 0.0, 0.0, 0.0, None
+        flown = trajectory.position(0.0)  # a dry run's drone: flies the sticks exactly
         while True:
-            t = clock.now() - began
-            if link.state_age() > settings.link_timeout:
-                raise LinkLostError(f"no state packet for {settings.link_timeout:g} s "
-                                    f"during the rc flight (t = {t:.1f} s)")
-            reference = trajectory.position(t)
-            position = self.estimator.position() if link.reports_state else reference
+            t, before = clock.now() - began, t
+            tau = min(trajectory.duration, tau + pace * (t - before))
+            if link.reports_state:
+                if link.state_age() > settings.link_timeout:
+                    raise LinkLostError(f"no state packet for {settings.link_timeout:g} s "
+                                        f"during the rc flight (t = {t:.1f} s)")
+                self._check_battery()
+            reference = trajectory.position(tau)
+            position = self.estimator.position() if link.reports_state else flown
             if not plan.fence.point_ok(position):
                 raise GeofenceError(f"geofence: the dead-reckoned position "
                                     f"{format_point(position)} left the fence at "
                                     f"t = {t:.1f} s")
-            miss = float(np.linalg.norm(position - trajectory.position(trajectory.duration)))
-            if t >= trajectory.duration and (miss <= GOAL_TOLERANCE
-                                             or t >= trajectory.duration + RC_SETTLE):
-                break
-            velocity = tracking_velocity(reference, trajectory.velocity(t), position,
-                                         settings.rc_gain)
+            miss = float(np.linalg.norm((position - end)[:2]))  # the landing is vertical
+            if tau >= trajectory.duration:
+                finished = t if finished is None else finished
+                if miss <= GOAL_TOLERANCE or t >= finished + RC_SETTLE:
+                    break
+            velocity_ref = trajectory.velocity(tau)
+            pace = bound.pace(reference, velocity_ref)
+            wanted = bound.limit(position, tracking_velocity(
+                reference, pace * velocity_ref, position, settings.rc_gain))
+            sticks = rounder(stick_values(wanted, yaw), lambda s, p=position: bound.is_safe(
+                p, stick_velocity(s, yaw)))
+            velocity = stick_velocity(sticks, yaw)
             self.estimator.expect(velocity)
-            link.send_rc_control(*rounder(stick_values(velocity, plan.frame.yaw)))
+            link.send_rc_control(*sticks)
+            flown = position + period * velocity
             ticks += 1
             clock.sleep_until(began + ticks * period)
-        link.send_rc_control(0, 0, 0, 0)
+        link.send_rc_control(0, 0, 0, 0)  # heard or not: the last sticks are safe either way
         self.estimator.expect(None)
-        return (f"{ticks} rc commands over {t:.1f} s (estimate {100 * miss:.0f} cm from the "
-                "trajectory's end)")
+        return (f"{ticks} rc commands over {t:.1f} s (the trajectory takes "
+                f"{trajectory.duration:.1f} s; slowed where a lost link could otherwise "
+                f"leave the geofence; estimate {100 * miss:.0f} cm beside its end)")
 
-    def _safe_stop(self, status: Status, reason: str) -> Outcome:
-        """Centre the sticks, hover, land; the outcome says why and whether it landed."""
-        link = self.link
+    def _check_battery(self) -> None:
+        """AutoLandingError if the state packets say the battery is below the level at
+        which a Tello lands by itself (in ``rc`` mode, where no reply would say so)."""
+        battery = self.link.get_battery()
+        if battery < LOW_BATTERY:
+            raise AutoLandingError(f"battery {battery} % in flight, below the {LOW_BATTERY} "
+                                   "% at which a Tello lands by itself")
+
+    # --- ending --------------------------------------------------------------------------
+
+    def _safe_stop(self, status: Status, reason: str, signum: int | None = None) -> Outcome:
+        """Centre the sticks, hover, land; the outcome says why and how it went."""
+        self.signals.hold()
         self.log.event(f"safe stop: {reason}")
         if self.settings.mode == "rc":
-            link.send_rc_control(0, 0, 0, 0)
-        try:
-            link.command("stop", self._timeout(STOP_TIME))
-        except (LinkLostError, CommandRefusedError) as error:
-            self.log.event(f"stop: {error}")
-        _, how = self._land()
-        return self._end(status, f"{reason}; safe stop: stopped, {how}")
+            self.link.send_rc_control(0, 0, 0, 0)
+        stop = self.lander.stop()
+        landing = self.lander.land()
+        if not landing.confirmed:
+            return self._link_lost(f"{reason}; {stop}, and {landing.text}",
+                                   status if signum is not None else Status.LINK_LOST,
+                                   signum)
+        return Outcome(status, f"{reason}; safe stop: {stop}, {landing.text}", signum)
 
-    def _land(self) -> tuple[bool, str]:
-        """Send ``land`` until it is confirmed: whether it was, and how it went."""
-        for _ in range(LAND_ATTEMPTS):
-            try:
-                self.link.command("land", self._timeout(LAND_TIME))
-                return True, "landed"
-            except (LinkLostError, CommandRefusedError) as error:
-                self.log.event(f"land: {error}")
-            if self._on_floor():
-                return True, "landed (seen in the state packets)"
-        return False, (f"sent land {LAND_ATTEMPTS} times with no confirmation: the link is "
-                       "down; a Tello lands by itself 15 s after its last command")
+    def _landed_by_itself(self, reason: str) -> Outcome:
+        """The drone lands by itself: centre the sticks, land, wait for the floor."""
+        self.signals.hold()
+        self.log.event(f"landing by itself: {reason}")
+        if self.settings.mode == "rc":
+            self.link.send_rc_control(0, 0, 0, 0)
+        landing = self.lander.land()
+        if not landing.confirmed:
+            return self._link_lost(f"{reason}; {landing.text}", Status.LINK_LOST)
+        return Outcome(Status.AUTO_LANDED, f"{reason}; {landing.text}, battery "
+                       f"{self.link.get_battery()} %")
 
-    def _on_floor(self) -> bool:
-        """Whether fresh state packets say the drone is on the floor."""
-        link = self.link
-        return (link.reports_state and link.state_age() <= self.settings.link_timeout
-                and link.get_height() <= LANDED_HEIGHT_CM)
+    def _link_lost(self, what: str, status: Status, signum: int | None = None) -> Outcome:
+        """The outcome of a landing never confirmed: what happened, and what the drone
+        does if it heard nothing more."""
+        track = self.estimator.track()
+        seen = (f"; last seen at {format_point(track[-1, 1:])} (state packets)"
+                if len(track) else "")
+        lost = "" if status is Status.LINK_LOST else ": the link is lost"
+        return Outcome(status, f"{what}{lost}; if the Tello heard none of it, it "
+                       f"{self.if_lost} and lands by itself {AUTO_LAND_AFTER:g} s after "
+                       f"the last command it heard{seen}", signum)
 
-    def _end(self, status: Status, message: str) -> Outcome:
-        self.log.event(f"{status.value}: {message}")
-        return Outcome(status, message)
+
+def stopped_by(signum: int) -> str:
+    """``stopped by SIGTERM``, ``interrupted by Ctrl-C (SIGINT)``."""
+    verb = "interrupted" if signum == signal.SIGINT else "stopped"
+    return f"{verb} by {signal_name(signum)}"
+
+
+def with_held_signals(outcome: Outcome, held: list[int]) -> Outcome:
+    """``outcome`` with the stop signals ``held`` while the drone was brought down said;
+    the first one makes it an interrupted flight if it was not one already."""
+    if not held:
+        return outcome
+    names = ", ".join(signal_name(signum) for signum in held)
+    message = f"{outcome.message}; {names} came later and waited until the drone was down"
+    if outcome.signum is not None:
+        return Outcome(outcome.status, message, outcome.signum)
+    return Outcome(Status.INTERRUPTED, message, held[0])
 
 
 def _tello_link(host: str, log: TelloLog, estimator: DeadReckoning,
@@ -310,6 +392,22 @@ def _tello_link(host: str, log: TelloLog, estimator: DeadReckoning,
     except OSError as error:
         raise QuadnavError(f"cannot open djitellopy's UDP port 8889: {error.strerror} (is "
                            "another Tello program running?)") from None
+
+
+def rc_pace(plan: FlightPlan, settings: BridgeSettings) -> SlowedFlight:
+    """How the ``rc`` flight of ``plan`` is slowed by the lost-link bound.
+
+    Raises:
+        RcModeError: somewhere the trajectory cannot be followed at any safe speed.
+    """
+    slowed = slowed_flight(LostLinkBound(plan.fence), plan.trajectory, settings.rc_rate)
+    if slowed.stalls:
+        raise RcModeError(
+            f"rc mode cannot fly this plan: at {format_point(slowed.where)} the trajectory "
+            f"heads for the geofence so closely that no stick speed is safe if the link "
+            f"dies (the Tello would fly on for {HOLD:g} s); nothing was sent (try --mode "
+            "waypoints)")
+    return slowed
 
 
 def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
@@ -333,9 +431,13 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
     Raises:
         MoveError: (waypoints mode) the route cannot be flown with ``go`` moves; nothing
             was sent.
+        RcModeError: (rc mode) see :func:`rc_pace`; nothing was sent.
     """
+    slowed = None
     if settings.mode == "waypoints":  # moves the SDK cannot fly: refused before anything
         plan.go_moves(TAKEOFF_HEIGHT, go_speed(plan.speed))
+    else:
+        slowed = rc_pace(plan, settings)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     dry_run = host is None
@@ -346,19 +448,32 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
                   goal=plan.problem.goal.tolist(), margin_m=plan.fence.margin,
                   yaw_rad=plan.frame.yaw, speed_m_s=plan.speed,
                   time_scale=settings.time_scale) as log:
+        if slowed is not None:
+            log.event(f"rc sticks bounded for a lost link: the flight takes about "
+                      f"{slowed.duration:.0f} s (the trajectory {slowed.planned:.0f} s), "
+                      f"slowest {100 * slowed.slowest:.0f} % of the trajectory's speed at "
+                      f"{format_point(slowed.where)}")
         link = DryRunLink(log, stream) if dry_run else _tello_link(host, log, estimator,
                                                                    settings)
-        try:
-            outcome = _Flight(plan, link, estimator, settings, clock, log).run()
-        finally:
-            link.close()
+        with StopSignals() as signals:
+            try:
+                outcome = _Flight(plan, link, estimator, settings, clock, log, slowed,
+                                  signals).run()
+            finally:
+                link.close()
+            track = estimator.track()
+            _draw(plan, settings.mode, track, truth, outcome, folder / TRACK_FIGURE)
+    return with_held_signals(outcome, signals.take()), track
+
+
+def _draw(plan: FlightPlan, mode: str, track: FloatArray,
+          truth: Callable[[], FloatArray] | None, outcome: Outcome, path: Path) -> None:
+    """Save the figure of the flight: planned, dead-reckoned ``track`` (N, 4) and, when
+    known, the true track."""
     from quadnav.hardware.track_figure import track_figure  # matplotlib: only when needed
     from quadnav.viz.figures import save_figure
 
-    track = estimator.track()
     flown = {"dead reckoning (state packets)": track[:, 1:]}
     if truth is not None:
         flown["true track (emulator)"] = truth()
-    save_figure(track_figure(plan, settings.mode, flown, outcome.status.value),
-                folder / TRACK_FIGURE)
-    return outcome, track
+    save_figure(track_figure(plan, mode, flown, outcome.status.value), path)

@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 
 from quadnav.control.cascade import gain_arrays, new_memory
 from quadnav.control.gains import Gains
-from quadnav.hardware.sdk import Telemetry
+from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
 from quadnav.sim.collision import body_grid
 from quadnav.sim.settings import SimSettings
@@ -72,8 +72,6 @@ TRACK_PERIOD = 0.02
 #: Battery drain, percent per second, with the motors running and with them off.
 DRAIN_FLYING = 100.0 / 720.0
 DRAIN_IDLE = 100.0 / 3600.0
-#: Below this reported battery percentage the drone refuses to take off and lands by itself.
-LOW_BATTERY = 10
 #: Standard gravity for the accelerometer's thousandths of g, m/s^2.
 _G = 9.80665
 #: Minimum-jerk shape: sigma(u) = 10u^3 - 15u^4 + 6u^5 rises from 0 to 1; its integral
@@ -246,14 +244,16 @@ class EmulatedDrone:
             is the plane at its height.
         yaw: world heading of the nose at power-on, rad counter-clockwise from +x.
         battery: battery at power-on, percent.
+        battery_drain: how many times faster than :data:`DRAIN_FLYING` and
+            :data:`DRAIN_IDLE` the battery drains (an aged battery: > 1).
         params: the vehicle (default: the ``tello`` preset).
         gains: the cascade (default: :class:`~quadnav.control.gains.Gains`).
         settings: the simulator's rates (default: :class:`~quadnav.sim.SimSettings`).
     """
 
     def __init__(self, start: ArrayLike, yaw: float = 0.0, battery: float = 100.0,
-                 params: VehicleParams | None = None, gains: Gains | None = None,
-                 settings: SimSettings | None = None) -> None:
+                 battery_drain: float = 1.0, params: VehicleParams | None = None,
+                 gains: Gains | None = None, settings: SimSettings | None = None) -> None:
         self.params = params or load_params()
         self.settings = settings or SimSettings()
         self._vehicle = vehicle_arrays(self.params)
@@ -264,6 +264,7 @@ class EmulatedDrone:
         self.floor = float(self.start[2])
         self.initial_yaw = float(yaw)
         self.battery = float(battery)
+        self.battery_drain = float(battery_drain)
         self.time = 0.0
         self.motor_time = 0.0
         self.flying = False
@@ -389,7 +390,7 @@ class EmulatedDrone:
         self.time += elapsed
         if self.flying:
             self.motor_time += elapsed
-        self.battery = max(0.0, self.battery - elapsed * (
+        self.battery = max(0.0, self.battery - elapsed * self.battery_drain * (
             DRAIN_FLYING if self.flying else DRAIN_IDLE))
         return self._check_motion_end()
 

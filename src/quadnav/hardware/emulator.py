@@ -16,11 +16,12 @@ is not busy; read commands are answered at once, even during a motion. ``speed``
 the speed of ``up`` ... ``back`` (default :data:`DEFAULT_SPEED_CM_S`). Video
 (``streamon``), Wi-Fi, port and mission-pad settings are accepted and have no effect;
 mission-pad motions answer ``error Not valid marker``. Below
-:data:`~quadnav.hardware.emulated_drone.LOW_BATTERY` percent the drone will not take off
+:data:`~quadnav.hardware.sdk.LOW_BATTERY` percent the drone will not take off
 (``error Low battery``) and lands by itself; with no command for
-:data:`AUTO_LAND_AFTER` emulated seconds while flying (a motion in progress does not
-count), it lands by itself too. Flips need half the battery and are not flown (the
-drone hovers for a second).
+:data:`~quadnav.hardware.sdk.AUTO_LAND_AFTER` emulated seconds while flying (a motion in
+progress does not count), it lands by itself too. Flips need half the battery and are not
+flown (the drone hovers for a second). A command takes effect at the emulated time it
+arrives.
 
 Network: the emulator runs in its own Linux network namespace, joined to the client's by
 a virtual Ethernet pair (:mod:`quadnav.hardware.netns`, which explains why). The client's
@@ -28,7 +29,8 @@ end gets :func:`~quadnav.hardware.netns.peer_address` of ``host``. Needs root (o
 ``unshare -rn``) and iproute2.
 
 Faults for tests (:class:`Faults`): replies dropped with a probability, every reply
-late, the link dead both ways after some seconds, a low battery. Network faults are in
+late, the link dead both ways after some seconds, a low battery, an aged battery that
+drains faster (so that it runs low in flight). Network faults are in
 wall-clock seconds (the client's clock); flight, battery and the auto-land timer in
 emulated seconds.
 """
@@ -52,11 +54,17 @@ from quadnav.errors import QuadnavError
 from quadnav.hardware import sdk
 from quadnav.hardware.emulated_drone import FLIP_TIME, EmulatedDrone
 from quadnav.hardware.netns import Link, NetNamespace
-from quadnav.hardware.sdk import COMMAND_PORT, DEFAULT_HOST, OK, STATE_PORT, Command, SdkError
+from quadnav.hardware.sdk import (
+    AUTO_LAND_AFTER,
+    COMMAND_PORT,
+    DEFAULT_HOST,
+    OK,
+    STATE_PORT,
+    Command,
+    SdkError,
+)
 from quadnav.vehicle.params import FloatArray
 
-#: Emulated seconds without a command after which a flying drone lands by itself.
-AUTO_LAND_AFTER = 15.0
 #: Speed of ``up`` ... ``back`` until ``speed`` sets another, cm/s.
 DEFAULT_SPEED_CM_S = 100
 #: Wall-clock seconds between state packets (10 Hz).
@@ -69,9 +77,9 @@ MAX_STEP = 0.25
 BUSY = "error Busy"
 NOT_FLYING = "error Motor stop"
 ALREADY_FLYING = "error Already flying"
-AUTO_LANDING = "error Auto land"
+AUTO_LANDING = sdk.AUTO_LAND
 LOW_BATTERY_REPLY = "error Low battery"
-STOPPED = "error Stopped"
+STOPPED = sdk.MOTION_STOPPED
 #: Battery needed for a flip, percent.
 FLIP_BATTERY = 50
 #: ``up`` ... ``back`` as unit steps in the heading frame (x forward, y left, z up).
@@ -96,13 +104,17 @@ class Faults:
             lands by itself :data:`AUTO_LAND_AFTER` emulated seconds after the last
             command it heard.
         battery: battery at power-on, percent (below
-            :data:`~quadnav.hardware.emulated_drone.LOW_BATTERY`: too low to fly).
+            :data:`~quadnav.hardware.sdk.LOW_BATTERY`: too low to fly).
+        battery_drain: how many times faster than a new battery it drains (>= 1; an
+            aged battery's charge falls faster in flight, and the drone lands by itself
+            once it reports less than :data:`~quadnav.hardware.sdk.LOW_BATTERY` percent).
     """
 
     drop_replies: float = 0.0
     reply_delay_s: float = 0.0
     dead_after_s: float | None = None
     battery: float = 100.0
+    battery_drain: float = 1.0
 
     def __post_init__(self) -> None:
         require([
@@ -115,7 +127,10 @@ class Faults:
              f"Tello emulator fault dead_after_s {self.dead_after_s}: expected None or "
              ">= 0 s"),
             (0 <= self.battery <= 100,
-             f"Tello emulator fault battery {self.battery}: expected 0 to 100 percent")])
+             f"Tello emulator fault battery {self.battery}: expected 0 to 100 percent"),
+            (math.isfinite(self.battery_drain) and 1 <= self.battery_drain <= 1000,
+             f"Tello emulator fault battery_drain {self.battery_drain}: expected 1 to 1000 "
+             "times a new battery's")])
 
 
 def check_host(host: str) -> str:
@@ -178,7 +193,8 @@ class TelloEmulator:
         self.host = check_host(host)
         self.time_scale = float(time_scale)
         self.faults = faults or Faults()
-        self._drone = EmulatedDrone(start_point, yaw, battery=self.faults.battery)
+        self._drone = EmulatedDrone(start_point, yaw, battery=self.faults.battery,
+                                    battery_drain=self.faults.battery_drain)
         self._rng = np.random.default_rng(seed)
         self._client_netns = client_netns
         self._lock = threading.Lock()
@@ -192,6 +208,7 @@ class TelloEmulator:
         self._mission_pads = False
         self._speed = DEFAULT_SPEED_CM_S
         self._last_command = 0.0
+        self._advanced = 0.0  # wall-clock time the flight was advanced to
         self._serial = f"0TQEMU{seed % 10**8:08d}"
         self._threads: list[threading.Thread] = []
         self._namespaces: list[NetNamespace] = []
@@ -218,6 +235,7 @@ class TelloEmulator:
         except BaseException:
             self.stop()
             raise
+        self._advanced = time.monotonic()  # the flight's time starts now
         for target, name in ((self._receive, "receiver"), (self._run, "clock")):
             thread = threading.Thread(target=target, name=f"tello-emulator-{name}", daemon=True)
             thread.start()
@@ -284,19 +302,17 @@ class TelloEmulator:
                 return
             with self._lock:
                 if not self._link_dead():
+                    self._advance(time.monotonic())  # the command acts from its arrival
                     self._handle(data.decode("utf-8", errors="replace").strip(), address)
 
     def _run(self) -> None:
         """The emulator's clock: fly, finish motions, land by itself, send due replies
         and state packets, every :data:`TICK` s until stopped."""
-        last = time.monotonic()
-        next_state = last
+        next_state = time.monotonic()
         while not self._stopping.wait(TICK):
             now = time.monotonic()
             with self._lock:
-                ended = self._drone.advance(min(now - last, MAX_STEP) * self.time_scale)
-                last = now
-                self._after_step(ended)
+                self._advance(now)
                 self._flush(now)
                 if self._client is not None and now >= next_state:
                     next_state = max(next_state + STATE_PERIOD, now)
@@ -304,6 +320,14 @@ class TelloEmulator:
                     self._send(state, (self._client[0], STATE_PORT))
 
     # --- protocol (called with the lock held) ---------------------------------------
+
+    def _advance(self, now: float) -> None:
+        """Fly from the last advance up to wall-clock ``now`` (at most :data:`MAX_STEP`
+        of it), then finish motions and land by itself as due."""
+        if now > self._advanced:
+            ended = self._drone.advance(min(now - self._advanced, MAX_STEP) * self.time_scale)
+            self._advanced = now
+            self._after_step(ended)
 
     def _handle(self, text: str, address: tuple[str, int]) -> None:
         self._received.append((self._drone.time, text))

@@ -26,6 +26,11 @@ class CommandRefusedError(Exception):
     """The drone answered a command with something other than ``ok``."""
 
 
+class AutoLandingError(Exception):
+    """The drone is landing by itself: it answered ``error Auto land``, or its battery
+    fell below the level at which a Tello does (:data:`~quadnav.hardware.sdk.LOW_BATTERY`)."""
+
+
 class Link(Protocol):
     """A connection to one Tello.
 
@@ -40,7 +45,8 @@ class Link(Protocol):
 
     def command(self, command: str, timeout: float) -> None:
         """Send ``command`` and wait up to ``timeout`` wall-clock seconds for its ``ok``;
-        :class:`LinkLostError` or :class:`CommandRefusedError` otherwise."""
+        :class:`LinkLostError`, :class:`AutoLandingError` or :class:`CommandRefusedError`
+        otherwise."""
 
     def send_rc_control(self, left_right_velocity: int, forward_backward_velocity: int,
                         up_down_velocity: int, yaw_velocity: int) -> None:

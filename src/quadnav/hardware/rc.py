@@ -10,15 +10,20 @@ The velocity asked for is the trajectory's plus a proportional correction toward
 trajectory's position, capped at the full stick's speed. Rounding to whole percent is
 done with error diffusion (:class:`StickRounder`): what one command loses to rounding the
 next one gets, so the sticks' average is the velocity asked for, to within 1 % of
-:data:`RC_FULL_SPEED` over one period.
+:data:`RC_FULL_SPEED` over one period — unless the rounded sticks are not allowed (the
+lost-link bound, :mod:`quadnav.hardware.lost_link`), when as few axes as need be are
+rounded towards zero instead (or, failing all, the sticks are centred).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from itertools import combinations
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.hardware.frames import FloatArray, IntArray, map_to_body
+from quadnav.hardware.frames import FloatArray, IntArray, body_to_map, map_to_body
 
 #: Speed of a full stick (100), m/s (the Tello's default, slow, flight mode).
 RC_FULL_SPEED = 1.0
@@ -44,6 +49,13 @@ def stick_values(velocity: ArrayLike, yaw: float) -> FloatArray:
     return 100.0 / RC_FULL_SPEED * np.array([-left, forward, up])
 
 
+def stick_velocity(sticks: ArrayLike, yaw: float) -> FloatArray:
+    """The map-frame velocity (3,) m/s that sticks (right, forward, up, ...) in percent ask
+    of a drone facing ``yaw`` rad (the inverse of :func:`stick_values`)."""
+    right, forward, up = np.asarray(sticks, dtype=np.float64)[:3] * (RC_FULL_SPEED / 100.0)
+    return body_to_map([forward, -right, up], yaw)
+
+
 class StickRounder:
     """Whole-percent sticks (right, forward, up) whose running sum follows the unrounded
     ones' (error diffusion); the yaw stick is always 0."""
@@ -51,10 +63,27 @@ class StickRounder:
     def __init__(self) -> None:
         self._owed = np.zeros(3)
 
-    def __call__(self, values: ArrayLike) -> tuple[int, int, int, int]:
-        """The sticks (a, b, c, d) of the next ``rc`` command for unrounded ``values``."""
-        wanted = np.asarray(values, dtype=np.float64) + self._owed
-        sent: IntArray = np.clip(np.rint(wanted), -STICK_MAX, STICK_MAX).astype(np.int64)
+    def __call__(self, values: ArrayLike,
+                 allowed: Callable[[IntArray], bool] = lambda sticks: True
+                 ) -> tuple[int, int, int, int]:
+        """The sticks (a, b, c, d) of the next ``rc`` command for unrounded ``values``:
+        rounded with the error carried over — on as many axes as ``allowed`` (sticks
+        (3,)) lets, the others rounded towards zero instead — else centred."""
+        values = np.clip(np.asarray(values, dtype=np.float64), -STICK_MAX, STICK_MAX)
+        wanted = values + self._owed
+        rounded = np.clip(np.rint(wanted), -STICK_MAX, STICK_MAX)
+        sent: IntArray = np.zeros(3, dtype=np.int64)
+        for axes in _subsets_by_size(3):
+            candidate = rounded.copy()
+            candidate[axes] = np.trunc(values[axes])
+            if allowed(candidate.astype(np.int64)):
+                sent = candidate.astype(np.int64)
+                break
         self._owed = np.clip(wanted - sent, -1.0, 1.0)
         right, forward, up = (int(v) for v in sent)
         return right, forward, up, 0
+
+
+def _subsets_by_size(n: int) -> list[list[int]]:
+    """Every subset of ``range(n)``, smallest first."""
+    return [list(axes) for size in range(n + 1) for axes in combinations(range(n), size)]

@@ -51,6 +51,15 @@ BAD_ARGUMENTS = "error Bad arguments"
 NO_MARKER = "error Not valid marker"
 #: Commands sent without waiting for a reply; the drone sends none.
 SILENT = frozenset({"rc", "emergency", "reboot"})
+#: Seconds without a command after which a flying Tello lands by itself (its safety
+#: timeout; a motion in progress does not count).
+AUTO_LAND_AFTER = 15.0
+#: Below this battery percentage a Tello will not take off, and in flight it lands by itself.
+LOW_BATTERY = 10
+#: The reply to a motion, ``stop`` or ``land`` while the drone lands by itself.
+AUTO_LAND = "error Auto land"
+#: The reply of a motion that ``stop`` or ``emergency`` ended before its end.
+MOTION_STOPPED = "error Stopped"
 #: Shortest and longest curve radius, cm.
 CURVE_RADIUS_CM = (50.0, 1000.0)
 #: A go or curve point needs a component beyond +-this, cm.

@@ -21,7 +21,13 @@ from collections.abc import Callable
 from djitellopy import Tello
 from djitellopy import tello as djitellopy_module
 
-from quadnav.hardware.link import LINK_TIMEOUT, CommandRefusedError, LinkLostError
+from quadnav.hardware.link import (
+    LINK_TIMEOUT,
+    AutoLandingError,
+    CommandRefusedError,
+    LinkLostError,
+)
+from quadnav.hardware.sdk import AUTO_LAND, MOTION_STOPPED
 from quadnav.hardware.tello_log import TelloLog
 
 #: Wall-clock seconds the drone has to answer ``command`` and to send its first state.
@@ -94,16 +100,20 @@ class TelloLink(Tello):
     def send_command_with_return(self, command: str,
                                  timeout: float = Tello.RESPONSE_TIMEOUT) -> str:
         """Send ``command`` and return its reply, under the watchdog (see the module)."""
-        replies = self._record["responses"]
-        replies.clear()
+        self._record["responses"].clear()
         self.send_command_without_return(command)
-        sent = time.monotonic()
+        return self._next_reply(command, time.monotonic(), timeout)
+
+    def _next_reply(self, command: str, sent: float, timeout: float) -> str:
+        """The next reply, waited for under the watchdog: ``command`` was sent at
+        monotonic time ``sent`` and is due ``timeout`` s later."""
+        replies = self._record["responses"]
         while not replies:
             now = time.monotonic()
             last = self._record.last_state
             if last is not None and now - max(last, sent) > self.link_timeout:
                 raise LinkLostError(f"no state packet for {self.link_timeout:g} s while waiting "
-                               f"for the reply to '{command}'")
+                                    f"for the reply to '{command}'")
             if now - sent > timeout:
                 raise LinkLostError(f"no reply to '{command}' within {timeout:.2f} s")
             time.sleep(_POLL)
@@ -123,13 +133,24 @@ class TelloLink(Tello):
     def command(self, command: str, timeout: float) -> None:
         """Send a control command and wait up to ``timeout`` s for its ``ok``.
 
+        A ``stop`` that ends a motion gets two replies: the motion's ``error Stopped``,
+        then its own; the first is passed over.
+
         Raises:
             LinkLostError: no reply in time, or the state packets stopped.
+            AutoLandingError: the reply ``error Auto land``: the drone lands by itself.
             CommandRefusedError: any other reply.
         """
-        reply = self.send_command_with_return(command, timeout)
-        if reply.strip().lower() != "ok":
-            raise CommandRefusedError(f"the Tello answered '{command}' with '{reply}'")
+        sent = time.monotonic()
+        reply = self.send_command_with_return(command, timeout).strip()
+        if command == "stop" and reply == MOTION_STOPPED:
+            reply = self._next_reply(command, sent, timeout).strip()
+        if reply.lower() == "ok":
+            return
+        if reply == AUTO_LAND:
+            raise AutoLandingError(f"the Tello answered '{command}' with '{reply}': it is "
+                                   "landing by itself")
+        raise CommandRefusedError(f"the Tello answered '{command}' with '{reply}'")
 
     def state_age(self) -> float:
         """Seconds since the last state packet (inf before the first)."""
