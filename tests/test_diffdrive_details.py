@@ -7,6 +7,7 @@ import re
 
 import numpy as np
 import pytest
+from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined
 
 from quadnav.errors import MapError, PlanningWarning, QuadnavError
 from quadnav.kinodynamic import KinoSettings
@@ -335,6 +336,14 @@ def test_figures_are_written(tmp_path, walls_plan):
                                                  SETTINGS.goal_radius),
     }
     for name, fig in figures.items():
+        assert_legends_outside(fig)
+        assert_labels_apart(fig)
+        if name != "controls.png":
+            centres = [line for ax in fig.axes for line in ax.get_lines()
+                       if line.get_label().startswith("centre")]
+            assert len(centres) == (2 if name == "compare.png" else 1)
+            for centre in centres:
+                assert_outlined(centre)
         save_figure(fig, tmp_path / name)
         assert (tmp_path / name).stat().st_size > 10_000
 

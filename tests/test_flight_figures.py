@@ -8,6 +8,8 @@ import struct
 
 import numpy as np
 import pytest
+from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined
+from mpl_toolkits.mplot3d import Axes3D
 
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
@@ -82,14 +84,22 @@ def png_size(path) -> tuple[int, int]:
     return struct.unpack(">II", data[16:24])
 
 
-def legend_texts(ax) -> list[str]:
-    return [text.get_text() for text in ax.get_legend().get_texts()]
+def legend_texts(fig) -> list[str]:
+    """The entries of the figure's one legend."""
+    (legend,) = fig.legends
+    return [text.get_text() for text in legend.get_texts()]
 
 
 def line(ax, prefix: str):
     """The one line on ``ax`` whose label starts with ``prefix``."""
     (found,) = [ln for ln in ax.get_lines() if ln.get_label().startswith(prefix)]
     return found
+
+
+def points(ax, prefix: str) -> np.ndarray:
+    """(N, 3) points of the line ``prefix`` on a 3D axes, (N, 2) on a 2D one."""
+    drawn = line(ax, prefix)
+    return np.array(drawn.get_data_3d()).T if isinstance(ax, Axes3D) else drawn.get_xydata()
 
 
 def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(mission, run,
@@ -110,49 +120,51 @@ def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(missi
     assert not any((tmp_path / name).exists() for name in (*FIGURES, REPORT))
 
 
-def test_3d_figure_shows_both_views_with_path_trajectory_and_flight(run):
+def test_3d_figure_shows_an_oblique_3d_view_and_a_2d_top_view(run):
     fig = flight_3d_figure(run)
     flight = run.flight
-    assert len(fig.axes) == 2 and all(ax.name == "3d" for ax in fig.axes)
-    assert [(ax.elev, ax.azim) for ax in fig.axes] == [(30, -60), (90, -90)]
-    texts = legend_texts(fig.axes[0])
+    oblique, top = fig.axes
+    assert isinstance(oblique, Axes3D) and (oblique.elev, oblique.azim) == (30, -60)
+    assert not isinstance(top, Axes3D) and top.get_aspect() == 1.0  # to scale, in 2D
+    texts = legend_texts(fig)  # one legend, below both views
     for prefix in ("start", "goal", "tree (", "path (", "trajectory (", "flown ("):
         assert sum(t.startswith(prefix) for t in texts) == 1, (prefix, texts)
-    assert fig.axes[1].get_legend() is None
-    assert not any(t.startswith("collision") for t in texts)
-    extent = run.world.extent
-    for ax in fig.axes:
-        assert np.array_equal(np.array(line(ax, "flown").get_data_3d()).T, flight.position)
-        assert np.array_equal(np.array(line(ax, "trajectory").get_data_3d()).T,
-                              run.trajectory.position)
-        assert np.array_equal(np.array(line(ax, "path").get_data_3d()).T, run.path)
+    assert oblique.get_legend() is None and top.get_legend() is None
+    assert not any(t.startswith(("collision", "not to scale")) for t in texts)
+    for ax, columns in ((oblique, 3), (top, 2)):
+        assert np.array_equal(points(ax, "flown"), flight.position[:, :columns])
+        assert np.array_equal(points(ax, "trajectory"), run.trajectory.position[:, :columns])
+        assert np.array_equal(points(ax, "path"), run.path[:, :columns])
         assert line(ax, "path").get_color() == "red"
-        assert len(ax.collections) > 3  # blocks, boundary, spheres and the tree
-        aspect = ax.get_box_aspect()  # a metre is as long along every axis
-        assert np.allclose(aspect / aspect[0], extent / extent[0])
+        assert_outlined(line(ax, "path"))
+        assert len(ax.collections) >= 2  # blocks and the tree, at least
         assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
-    assert fig.axes[0].get_zlabel() == "z (m)"
+    aspect = oblique.get_box_aspect()  # a metre is as long along every axis
+    assert np.allclose(aspect / aspect[0], run.world.extent / run.world.extent[0])
+    assert oblique.get_zlabel() == "z (m)"
     title = fig._suptitle.get_text()
     assert run.metrics["map"] in title and "success" in title
     assert f"RMS tracking error {100 * run.metrics['rms_tracking_error_m']:.2f} cm" in title
     assert "2 m/s" in title
+    assert_legends_outside(fig)
+    assert_labels_apart(fig)
 
 
 def test_collision_is_marked_where_the_flight_stopped(crashed, crashed_mission):
     fig = flight_3d_figure(crashed)
     flight = crashed_mission.flight
-    assert any(t.startswith("collision (block 0") for t in legend_texts(fig.axes[0]))
+    assert any(t.startswith("collision (block 0") for t in legend_texts(fig))
     for ax in fig.axes:
-        marker = line(ax, "collision")
-        assert marker.get_marker() == "X"
-        assert np.allclose(np.array(marker.get_data_3d()).T, flight.position[-1:], atol=1e-6)
+        assert line(ax, "collision").get_marker() == "X"
+        marked = points(ax, "collision")  # x, y, z in 3D; x, y from above
+        assert np.allclose(marked, flight.position[-1:, :marked.shape[1]], atol=1e-6)
     assert f"collision at {flight.contact_time:.2f} s" in fig._suptitle.get_text()
 
 
 def test_a_run_without_a_path_shows_the_map_and_the_tree(pathless):
     assert list(figure_makers(pathless)) == [FIGURES[0]]
     fig = flight_3d_figure(pathless)
-    texts = legend_texts(fig.axes[0])
+    texts = legend_texts(fig)
     assert any(t.startswith("tree (") for t in texts)
     assert not any(t.startswith(("path", "trajectory", "flown")) for t in texts)
     assert fig._suptitle.get_text().endswith("\nno path")
@@ -185,7 +197,9 @@ def test_states_figure_plots_desired_and_actual_per_axis(which, request):
             assert high - low >= MIN_SPAN - 1e-12 and low <= actual[:, axis].min()
             assert high >= actual[:, axis].max()
     assert axes[-1, 0].get_xlabel() == axes[-1, 1].get_xlabel() == "time (s)"
-    assert axes[0, 0].get_legend() is not None
+    assert legend_texts(fig) == ["desired", "actual x", "actual y", "actual z"]
+    assert_legends_outside(fig)
+    assert_labels_apart(fig)
 
 
 @pytest.mark.parametrize("which", ["run", "crashed"])
@@ -207,4 +221,7 @@ def test_error_figure_shows_error_rms_and_max(which, request):
     assert note.xy == (flight.t[peak], recorded[peak])
     assert f"max {100 * metrics['max_tracking_error_m']:.2f} cm" in ax.get_title()
     assert ax.get_ylabel() == "position error (cm)" and ax.get_xlabel() == "time (s)"
-    assert ax.get_legend() is not None
+    assert [text.get_text() for text in ax.get_legend().get_texts()] == [
+        "tracking error", f"RMS {100 * metrics['rms_tracking_error_m']:.2f} cm"]
+    assert_legends_outside(fig)
+    assert_labels_apart(fig)

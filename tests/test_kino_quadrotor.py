@@ -11,6 +11,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.errors import PlanningWarning, QuadnavError
@@ -349,8 +350,12 @@ def test_figures_draw_the_tree_the_flight_and_the_controls(forest, forest_plan, 
     flight = ax.get_lines()[-1]
     assert np.allclose(np.array(flight.get_data_3d()).T[[0, -1]],
                        forest_plan.states[[0, -1], :3])
+    assert_outlined(flight)
+    assert_legends_outside(fig)
+    assert_labels_apart(fig)
     save_figure(fig, tmp_path / "tree.png")
     fig = quadrotor_controls_figure(forest_plan, MODEL)
+    assert_labels_apart(fig)
     assert len(fig.axes) == 4
     steps = fig.axes[0].get_lines()[0].get_data()
     assert steps[0][-1] == pytest.approx(forest_plan.duration)

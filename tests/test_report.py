@@ -24,7 +24,7 @@ SMALL = "forest:size=12x12x4,seed=2"
 IMAGE = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)" '
                    r'width="(\d+)" height="(\d+)"')
 #: Pixel sizes of the three figures (inches times 120 dpi).
-SIZES = [(1320, 660), (1320, 960), (1080, 480)]
+SIZES = [(1440, 840), (1320, 960), (1200, 480)]
 
 
 @pytest.fixture(scope="module")

@@ -117,7 +117,7 @@ def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
     page = tmp_path / "no/such/dir/page.html"
     assert main(["view", str(folder), "-o", str(page)]) == 2
     error = capsys.readouterr().err
-    assert error == f"quadnav: error: {page}: cannot write: No such file or directory\n"
+    assert error == f"quadnav: error: {page}: folder {str(page.parent)!r} does not exist\n"
     assert not list(tmp_path.iterdir())
 
 

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from quadnav.cli.args import positive_float
 from quadnav.cli.progress import fraction_bar
 from quadnav.report.rundir import read_run
 
+#: The animation's file name in DIR when no -o is given.
+DEFAULT_NAME = "flight.gif"
 #: Most frames drawn by default (a longer flight plays faster), and frames per second.
 MAX_FRAMES = 150
 DEFAULT_FPS = 20.0
@@ -31,10 +34,10 @@ def animate(args: argparse.Namespace) -> int:
     from quadnav.viz.animation import save_animation
 
     run = read_run(args.folder)
+    output = Path(args.output) if args.output else run.folder / DEFAULT_NAME
     with fraction_bar("animate", args.quiet) as progress:
-        info = save_animation(run, args.output, args.fps, args.speed, args.max_frames,
-                              progress)
-    print(f"wrote {args.output}: {info.frames} frames of {info.width} x {info.height} pixels "
+        info = save_animation(run, output, args.fps, args.speed, args.max_frames, progress)
+    print(f"wrote {output}: {info.frames} frames of {info.width} x {info.height} pixels "
           f"at {info.fps:.4g} fps, {info.speed:.3g}x real time")
     if info.speed > SPEED_NOTE * args.speed:
         print(f"  (faster than --speed {args.speed:g} to fit the flight in at most "
@@ -55,8 +58,9 @@ def add_animate_command(subparsers: argparse._SubParsersAction) -> None:
                     "than --max-frames frames plays faster than --speed (the command says "
                     "how fast). Exit 2 on bad input.")
     p.add_argument("folder", metavar="DIR", help="a quadnav fly output folder")
-    p.add_argument("-o", "--output", default="flight.gif", metavar="FILE",
-                   help="the animation to write, ending in .gif or .mp4 (default: flight.gif)")
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help="the animation to write, ending in .gif or .mp4 (default: "
+                        f"DIR/{DEFAULT_NAME})")
     p.add_argument("--fps", type=positive_float, default=DEFAULT_FPS, metavar="N",
                    help=f"frames per second (default: {DEFAULT_FPS:g}; a GIF rounds it so "
                         "that a frame lasts whole hundredths of a second, at least two)")

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from quadnav.report.rundir import VIEW_PAGE, read_run
 from quadnav.viz.html_viewer import write_viewer
 
 
 def view(args: argparse.Namespace) -> int:
-    """Read the run folder, write its page; print where it went."""
+    """Check the page's name, read the run folder, write its page; print where it went.
+    Exit 2 on bad input, nothing written."""
+    from quadnav.report.html_report import check_report_path
+
+    output = check_report_path(args.output) if args.output else None
     run = read_run(args.folder)
-    written = write_viewer(run, Path(args.output) if args.output else run.folder / VIEW_PAGE)
+    written = write_viewer(run, output or run.folder / VIEW_PAGE)
     print(f"wrote {written}")
     return 0
 
@@ -28,5 +31,5 @@ def add_view_command(subparsers: argparse._SubParsersAction) -> None:
                     "needs no network and no files beside it; open it in any browser.")
     p.add_argument("folder", metavar="DIR", help="a folder written by quadnav fly -o DIR")
     p.add_argument("-o", "--output", metavar="FILE",
-                   help=f"the page to write (default: DIR/{VIEW_PAGE})")
+                   help=f"the page to write, ending in .html (default: DIR/{VIEW_PAGE})")
     p.set_defaults(handler=view)

@@ -28,20 +28,20 @@ from quadnav.files import atomic_output
 from quadnav.report.rundir import Run
 from quadnav.vehicle.quaternion import to_matrix
 from quadnav.viz.flight_figures import run_outcome
-from quadnav.viz.map3d import draw_world
+from quadnav.viz.layout import finish
+from quadnav.viz.map3d import draw_world, map_legend
 from quadnav.viz.style import (
     DRONE_COLOR,
     DRONE_SCALE,
     FLOWN_COLOR,
     PATH_COLOR,
     TRAJECTORY_COLOR,
+    outlined,
 )
 
 #: Highest GIF frame rate, frames per second: a GIF stores whole hundredths of a second
 #: per frame, and viewers slow down frames shorter than 2/100 s.
 MAX_GIF_FPS = 50.0
-#: How much larger than matplotlib's default the 3D box is drawn.
-ZOOM = 1.2
 #: Size of the animation, inches, and its pixels per inch.
 FIGURE_SIZE = (8.0, 6.0)
 DPI = 100
@@ -90,26 +90,27 @@ def check_animation_path(path: str | Path) -> str:
 
 def _scene(run: Run, size: tuple[float, float], dpi: float
            ) -> tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]:
-    """The still part of every frame, drawn once at ``size`` inches and ``dpi``: the map,
-    start and goal, path, trajectory, legend and title, as an RGBA image (H, W, 4); and
-    the projection of points (N, 3), m, to that image's pixels (N, 2) from its bottom left
-    corner."""
+    """The still part of every frame, drawn once at ``size`` inches and ``dpi``: the map
+    (its box as large as its labels let it be), start and goal, path (outlined, so that
+    it shows on red blocks), trajectory, the legend below and the title, as an RGBA
+    image (H, W, 4); and the projection of points (N, 3), m, to that image's pixels
+    (N, 2) from its bottom left corner."""
     world, metrics = run.world, run.metrics
     fig = Figure(figsize=size, dpi=dpi)
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_axes((0.0, 0.08, 1.0, 0.84), projection="3d")
     handles = draw_world(ax, world, world.start, world.goal)
     handles += ax.plot(*run.path.T, color=PATH_COLOR, linewidth=1.4, linestyle="--",
-                       zorder=20, label="path")
+                       zorder=20, path_effects=outlined(1.4), label="path")
     handles += ax.plot(*run.trajectory.position.T, color=TRAJECTORY_COLOR, linewidth=2.0,
                        alpha=0.6, zorder=21, label="trajectory")
     handles += [Line2D([], [], color=FLOWN_COLOR, linewidth=1.6, label="flown"),
                 Line2D([], [], color=DRONE_COLOR, marker="o", linewidth=2.5,
                        label="drone (enlarged)")]
-    ax.set_box_aspect(tuple(world.extent), zoom=ZOOM)
     ax.view_init(elev=30, azim=-60)
-    fig.legend(handles=handles, loc="lower left", ncol=4, fontsize=8, frameon=False)
+    map_legend(fig, world, handles, loc="lower left", ncol=4, frameon=False)
     fig.suptitle(f"{metrics['map']}\n{run_outcome(metrics)}", fontsize=9)
+    finish(fig)
     canvas.draw()
     image = np.array(canvas.buffer_rgba())
     projection, to_pixels = ax.get_proj(), ax.transData.frozen()

@@ -1,6 +1,6 @@
 """Figures of a run folder read back (:class:`~quadnav.report.rundir.Run`): the run over
-the map in 3D, desired against actual states, and the position tracking error against
-time.
+the map (in 3D and from above), desired against actual states, and the position tracking
+error against time. Legends stand outside the plots.
 
 Every consumer (``quadnav fly``, the report, the viewer) draws from the files a run
 wrote, so a figure always shows what the folder holds.
@@ -14,11 +14,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from mpl_toolkits.mplot3d import Axes3D
+from matplotlib.lines import Line2D
 
 from quadnav.report.rundir import FIGURES, FlightTable, Run
 from quadnav.sim.flight import Ending
-from quadnav.viz.map3d import draw_world
+from quadnav.viz.layout import finish
+from quadnav.viz.map3d import map_legend
 from quadnav.viz.plan_figure import draw_tree
 from quadnav.viz.style import (
     AXIS_COLORS,
@@ -26,10 +27,10 @@ from quadnav.viz.style import (
     FLOWN_COLOR,
     PATH_COLOR,
     TRAJECTORY_COLOR,
+    outlined,
 )
+from quadnav.viz.topview import draw_map, plot_points, two_views
 
-#: The two views of :func:`flight_3d_figure`: title, elevation and azimuth, degrees.
-VIEWS = (("oblique view", 30.0, -60.0), ("top view", 90.0, -90.0))
 CM_PER_M = 100.0
 #: Least height of a states plot's y range, m or m/s, so that an axis barely moving is
 #: drawn flat instead of magnifying round-off.
@@ -38,8 +39,8 @@ MIN_SPAN = 0.2
 #: shown about 1100 pixels wide (the report's width).
 SMALL_FONT = 9
 TITLE_FONT = 10
-#: Height of the tracking error plot over the largest error, for the legend and the note.
-HEADROOM = 1.3
+#: Height of the tracking error plot over the largest error, for the note.
+HEADROOM = 1.15
 
 
 def run_outcome(metrics: dict) -> str:
@@ -54,58 +55,54 @@ def run_outcome(metrics: dict) -> str:
     return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
 
 
-def _draw_run(ax: Axes3D, run: Run) -> list:
-    """The map, tree, path, trajectory and flown track (and a collision marker) on one
-    3D axes, whichever the run has; returns the legend handles."""
+def _draw_run(ax: Axes, run: Run) -> list:
+    """The map, tree, path, trajectory and flown track (and a collision marker) on a 3D
+    axes or, seen from above, on a 2D one, whichever the run has; returns the legend
+    handles."""
     world, metrics, flight = run.world, run.metrics, run.flight
-    handles = draw_world(ax, world, world.start, world.goal)
+    handles = draw_map(ax, world, world.start, world.goal)
     tree = draw_tree(ax, run.tree_edges())
     if tree is not None:
         handles.append(tree)
     if run.path is not None:
-        handles += ax.plot(*run.path.T, color=PATH_COLOR, linewidth=1.6, linestyle="--",
-                           zorder=20, label=f"path ({metrics['path_length_m']:.2f} m, "
-                                            f"{len(run.path)} waypoints)")
+        handles += plot_points(ax, run.path, color=PATH_COLOR, linewidth=1.6, linestyle="--",
+                               zorder=20, path_effects=outlined(1.6),
+                               label=f"path ({metrics['path_length_m']:.2f} m, "
+                                     f"{len(run.path)} waypoints)")
     if run.trajectory is not None:
-        handles += ax.plot(*run.trajectory.position.T, color=TRAJECTORY_COLOR, linewidth=2.6,
-                           alpha=0.85, zorder=21,
-                           label=f"trajectory ({run.trajectory.t[-1]:.2f} s)")
+        handles += plot_points(ax, run.trajectory.position, color=TRAJECTORY_COLOR,
+                               linewidth=2.6, alpha=0.85, zorder=21,
+                               label=f"trajectory ({run.trajectory.t[-1]:.2f} s)")
     if flight is not None:
-        handles += ax.plot(*flight.position.T, color=FLOWN_COLOR, linewidth=1.0, zorder=22,
-                           label=f"flown ({flight.t[-1]:.2f} s)")
+        handles += plot_points(ax, flight.position, color=FLOWN_COLOR, linewidth=1.0,
+                               zorder=22, label=f"flown ({flight.t[-1]:.2f} s)")
         if metrics["ending"] == Ending.COLLISION.value:
-            handles += ax.plot(*flight.position[-1:].T, color=COLLISION_COLOR, marker="X",
-                               markersize=13, markeredgecolor="black", linestyle="",
-                               zorder=30, label=f"collision (block {metrics['contact_block']}, "
-                                                f"{metrics['contact_time_s']:.2f} s)")
+            handles += plot_points(ax, flight.position[-1:], color=COLLISION_COLOR,
+                                   marker="X", markersize=13, markeredgecolor="black",
+                                   linestyle="", zorder=30,
+                                   label=f"collision (block {metrics['contact_block']}, "
+                                         f"{metrics['contact_time_s']:.2f} s)")
     return handles
 
 
 def flight_3d_figure(run: Run) -> Figure:
-    """The map, the explored tree, the path (red, dashed), the trajectory and the flown
-    track seen obliquely and from above, a cross where a collision stopped the flight;
-    the title gives the map, the outcome, the RMS tracking error and the top speed.
-    A run without a path shows the map and the tree."""
+    """The map, the explored tree, the path (red, dashed, outlined), the trajectory and
+    the flown track seen obliquely (3D) and from above (2D, to scale), a cross where a
+    collision stopped the flight, one legend below both; the title gives the map, the
+    outcome, the RMS tracking error and the top speed. A run without a path shows the
+    map and the tree."""
     metrics = run.metrics
-    fig = plt.figure(figsize=(11, 5.5), dpi=120)
-    for column, (title, elev, azim) in enumerate(VIEWS):
-        ax = fig.add_subplot(1, 2, column + 1, projection="3d")
-        handles = _draw_run(ax, run)
-        ax.view_init(elev=elev, azim=azim)
-        if elev == 90.0:  # a plan view: no perspective, and no height axis to read
-            ax.set_proj_type("ortho")
-            ax.set_zticks([])
-            ax.set_zlabel("")
-        ax.set_title(title, fontsize=TITLE_FONT)
-        if column == 0:
-            ax.legend(handles=handles, loc="upper left", fontsize=SMALL_FONT)
+    fig, oblique, top = two_views(run.world, (12, 7))
+    handles = _draw_run(oblique, run)
+    _draw_run(top, run)
+    map_legend(fig, run.world, handles, loc="outside lower center", ncol=3,
+               fontsize=SMALL_FONT)
     summary = run_outcome(metrics)
     if run.flight is not None:
         summary += (f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm, "
                     f"top speed {metrics['speed_m_s']:g} m/s")
     fig.suptitle(f"{metrics['map']}\n{summary}", fontsize=TITLE_FONT)
-    fig.tight_layout()
-    return fig
+    return finish(fig)
 
 
 def _widen(ax: Axes, span: float) -> None:
@@ -132,10 +129,12 @@ def desired_velocity(run: Run) -> np.ndarray:
 
 def flight_states_figure(run: Run) -> Figure:
     """Desired (dashed) against actual (solid) position and velocity per axis against
-    time: rows x, y, z; columns position (m), velocity (m/s). The desired position is
-    flight.csv's reference, the desired velocity :func:`desired_velocity`."""
+    time: rows x, y, z; columns position (m), velocity (m/s); one legend below. The
+    desired position is flight.csv's reference, the desired velocity
+    :func:`desired_velocity`."""
     flight = _flight(run)
-    fig, axes = plt.subplots(3, 2, figsize=(11, 8), dpi=120, sharex=True)
+    fig, axes = plt.subplots(3, 2, figsize=(11, 8), dpi=120, sharex=True,
+                             layout="constrained")
     columns = (("position", "m", flight.reference, flight.position),
                ("velocity", "m/s", desired_velocity(run), flight.velocity))
     for column, (name, unit, desired, actual) in enumerate(columns):
@@ -149,12 +148,15 @@ def flight_states_figure(run: Run) -> Figure:
             ax.set_ylabel(f"{symbol if column == 0 else 'v' + symbol} ({unit})")
             ax.grid(alpha=0.3)
         axes[0, column].set_title(name, fontsize=TITLE_FONT)
-        axes[0, column].legend(loc="upper right", fontsize=SMALL_FONT, ncol=2)
         axes[-1, column].set_xlabel("time (s)")
+    fig.legend(handles=[Line2D([], [], color="0.1", linestyle="--", linewidth=1.0,
+                               label="desired"),
+                        *(Line2D([], [], color=color, linewidth=1.6, label=f"actual {name}")
+                          for name, color in zip("xyz", AXIS_COLORS, strict=True))],
+               loc="outside lower center", ncol=4, fontsize=SMALL_FONT)
     fig.suptitle(f"desired and actual states: {run.metrics['ending']} after "
                  f"{flight.t[-1]:.2f} s", fontsize=TITLE_FONT)
-    fig.tight_layout()
-    return fig
+    return finish(fig)
 
 
 def tracking_error(flight: FlightTable) -> np.ndarray:
@@ -164,13 +166,13 @@ def tracking_error(flight: FlightTable) -> np.ndarray:
 
 def tracking_error_figure(run: Run) -> Figure:
     """The distance from the reference position against time, cm, with the RMS as a
-    dashed line and the largest recorded error marked; the RMS and maximum over every
-    control step (metrics.json) are in the title."""
+    dashed line and the largest recorded error marked, the legend beside; the RMS and
+    maximum over every control step (metrics.json) are in the title."""
     flight, metrics = _flight(run), run.metrics
     error = CM_PER_M * tracking_error(flight)
     rms = CM_PER_M * metrics["rms_tracking_error_m"]
     duration = flight.t[-1]
-    fig, ax = plt.subplots(figsize=(9, 4), dpi=120)
+    fig, ax = plt.subplots(figsize=(10, 4), dpi=120, layout="constrained")
     ax.plot(flight.t, error, color="tab:blue", linewidth=1.2, label="tracking error")
     ax.axhline(rms, color="black", linestyle="--", linewidth=0.8, label=f"RMS {rms:.2f} cm")
     peak = int(np.argmax(error))
@@ -185,13 +187,12 @@ def tracking_error_figure(run: Run) -> Figure:
     ax.set_ylabel("position error (cm)")
     ax.set_ylim(bottom=0.0, top=HEADROOM * max(float(error.max()), rms, 1e-6))
     ax.grid(alpha=0.3)
-    ax.legend(loc="upper right" if left else "upper left", fontsize=SMALL_FONT, ncol=2)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=SMALL_FONT)
     ax.set_title(f"position tracking error ({metrics['ending']} after {duration:.2f} s)\n"
                  f"over every control step: RMS {rms:.2f} cm, "
                  f"max {CM_PER_M * metrics['max_tracking_error_m']:.2f} cm",
                  fontsize=TITLE_FONT)
-    fig.tight_layout()
-    return fig
+    return finish(fig)
 
 
 def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:

@@ -15,8 +15,9 @@ from numpy.typing import ArrayLike
 
 from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
-from quadnav.viz.map3d import draw_world
-from quadnav.viz.style import PATH_COLOR, TREE_COLOR
+from quadnav.viz.layout import finish
+from quadnav.viz.map3d import draw_world, map_legend
+from quadnav.viz.style import PATH_COLOR, TREE_COLOR, outlined
 from quadnav.viz.thinning import evenly_spread
 from quadnav.world.model import World
 
@@ -38,8 +39,9 @@ def _motions(model: SampledQuadrotor, states: FloatArray, controls: FloatArray,
 def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
                      goal: ArrayLike | None = None, flown: ArrayLike | None = None
                      ) -> Figure:
-    """The world with the tree's parabolas in a light colour, the planned flight in red,
-    start and goal spheres; the title gives the outcome and search statistics.
+    """The world with the tree's parabolas in a light colour, the planned flight in red
+    (outlined, so that it shows on red blocks), start and goal spheres, the legend
+    beside; the title gives the outcome and search statistics.
 
     Args:
         world: the map, blocks not inflated.
@@ -50,7 +52,7 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
             6-DOF dynamics (:func:`~quadnav.kinodynamic.replay6dof.replay_6dof`), drawn
             dashed (when the plan is solved) with its distance from the planned end.
     """
-    fig = plt.figure(figsize=(9, 7), dpi=120)
+    fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")
     ax = fig.add_subplot(projection="3d")
     if goal is None and result.solved:
         goal = result.states[-1, :3]
@@ -76,30 +78,29 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
     if result.solved:
         path = _motions(model, result.states[:-1], result.controls, result.durations,
                         PATH_PIECES)
-        ax.plot(*np.concatenate([path[:, :-1].reshape(-1, 3), result.states[-1:, :3]]).T,
-                color=PATH_COLOR, linewidth=2.2, zorder=20)
-        handles.append(Line2D([], [], color=PATH_COLOR, linewidth=2.2,
-                              label=f"flight ({result.duration:.2f} s)"))
+        handles += ax.plot(*np.concatenate([path[:, :-1].reshape(-1, 3),
+                                            result.states[-1:, :3]]).T,
+                           color=PATH_COLOR, linewidth=2.2, zorder=20,
+                           path_effects=outlined(2.2), label=f"flight ({result.duration:.2f} s)")
     ax.view_init(elev=30, azim=-60)
-    ax.legend(handles=handles, loc="upper left", fontsize=8)
+    map_legend(fig, world, handles)
     outcome = (f"{len(result.controls)} controls, {result.duration:.2f} s" if result.solved
                else "goal not reached")
     ax.set_title(f"{world.name}\n{result.planner}, seed {result.seed}: {outcome}, "
                  f"{len(result.tree_states):,} states, {result.iterations:,} iterations in "
                  f"{result.seconds:.2f} s", fontsize=9)
-    fig.tight_layout()
-    return fig
+    return finish(fig)
 
 
 def quadrotor_controls_figure(result: KinoResult, model: SampledQuadrotor | None = None
                               ) -> Figure:
     """Roll and pitch (degrees) and thrust (N) against time as step plots, and the speed
     (m/s); with ``model``, its limits as dashed lines and the hover thrust dotted."""
-    fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=120, sharex=True)
+    fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=120, sharex=True,
+                             layout="constrained")
     if not result.solved:
         axes[0].set_title(f"{result.planner}: goal not reached, no controls", fontsize=9)
-        fig.tight_layout()
-        return fig
+        return finish(fig)
     knots = np.concatenate([[0.0], np.cumsum(result.durations)])
     # A held control is drawn to the end of its interval: repeat the last one at the end.
     held = np.vstack([result.controls, result.controls[-1:]])
@@ -128,5 +129,4 @@ def quadrotor_controls_figure(result: KinoResult, model: SampledQuadrotor | None
         axes[2].axhline(model.hover_thrust, color="gray", linestyle=":", linewidth=0.8)
     axes[0].set_title(f"{result.planner}, seed {result.seed}: {len(result.controls)} controls "
                       f"over {result.duration:.2f} s", fontsize=9)
-    fig.tight_layout()
-    return fig
+    return finish(fig)

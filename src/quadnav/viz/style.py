@@ -2,6 +2,10 @@
 animation and the Blender scene), so a path is the same red everywhere. Matplotlib colour
 specs; RGBA tuples in [0, 1]."""
 
+from __future__ import annotations
+
+from matplotlib.patheffects import AbstractPathEffect, Normal, Stroke
+
 TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
 PATH_COLOR = "red"
 START_COLOR = "red"
@@ -14,3 +18,14 @@ DRONE_COLOR = "tab:purple"
 DRONE_SCALE = 0.03
 #: x, y, z.
 AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
+#: Widths, points, of the two edges of an outlined line: white inside, black outside.
+OUTLINE_WIDTHS = (1.0, 0.8)
+
+
+def outlined(width: float) -> list[AbstractPathEffect]:
+    """Path effects (matplotlib's ``path_effects``) that edge a line ``width`` points wide
+    in white, then black, so that it stands out on blocks of any colour: RBE595 maps
+    colour every block red, as red as the path."""
+    white, black = OUTLINE_WIDTHS
+    return [Stroke(linewidth=width + 2 * (white + black), foreground="black"),
+            Stroke(linewidth=width + 2 * white, foreground="white"), Normal()]
