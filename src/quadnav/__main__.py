@@ -1,7 +1,5 @@
 """``python -m quadnav`` runs the command line."""
 
-import sys
+from quadnav.cli.launch import console
 
-from quadnav.cli.launch import main
-
-sys.exit(main())
+console()
