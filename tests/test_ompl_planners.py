@@ -128,7 +128,8 @@ def test_no_path_within_the_budget_is_reported_cleanly(name):
     assert not result.solved
     assert result.path.shape == (0, 3) and result.length == float("inf")
     assert result.stats.time_to_first is None and result.stats.cost_history.shape == (0, 2)
-    assert "no path found within the 0.15 s budget" in result.message
+    assert result.message.startswith("no path found in ")
+    assert result.message.endswith("the time budget ran out; raise --time")
 
 
 def test_the_registry_runs_ompl_planners():

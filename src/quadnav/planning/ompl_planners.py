@@ -66,7 +66,14 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 from quadnav.errors import QuadnavError
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.registry import OMPL_PLANNERS, OMPL_PREFIX, Progress
-from quadnav.planning.result import FloatArray, IntArray, PlanResult, PlanStats, path_length
+from quadnav.planning.result import (
+    FloatArray,
+    IntArray,
+    PlanResult,
+    PlanStats,
+    no_path_message,
+    path_length,
+)
 from quadnav.planning.settings import PlannerSettings
 from quadnav.world.blockgrid import grid_point_free, grid_segment_free
 from quadnav.world.model import World
@@ -320,25 +327,25 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
         nodes, parents = ((np.zeros((0, 3)), np.zeros(0, dtype=np.int64))
                           if name in _GRAPH_KEPT_FOREVER else _tree(planner, si))
         iterations = planner.numIterations() if hasattr(planner, "numIterations") else 0
-    message = ""
     if search_path is None:
         history = []
-        message = (f"no path found within the {settings.time_limit:g} s budget"
-                   + (f" or {settings.max_iterations} iterations" if settings.max_iterations
-                      else "") + "; try a longer --time")
     elif not history or path_length(search_path) < history[-1][1]:
         history.append((seconds, path_length(search_path)))
+    capped = bool(settings.max_iterations) and iterations >= settings.max_iterations
+    stats = PlanStats(iterations=int(iterations), nodes=len(nodes), seconds=seconds,
+                      time_to_first=history[0][0] if history else None,
+                      cost_history=np.array(history).reshape(-1, 2),
+                      stopped_by="iterations" if capped else "time")
     return PlanResult(
         planner=OMPL_PREFIX + name,
         solved=search_path is not None,
         path=problem.full_path(search_path) if search_path is not None else np.zeros((0, 3)),
         tree_nodes=nodes,
         tree_parents=parents,
-        stats=PlanStats(iterations=int(iterations), nodes=len(nodes), seconds=seconds,
-                        time_to_first=history[0][0] if history else None,
-                        cost_history=np.array(history).reshape(-1, 2)),
+        stats=stats,
         seed=settings.seed,
-        message=message,
+        message="" if search_path is not None else no_path_message(
+            stats, settings.max_iterations, settings.time_limit),
     )
 
 
