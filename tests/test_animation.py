@@ -122,8 +122,8 @@ def test_an_mp4_without_ffmpeg_is_a_user_error(flown, tmp_path, monkeypatch):
     (["-o", "{tmp}/flight.avi"], ["flight.avi", "expected a file name ending in .gif or .mp4"]),
     (["-o", "{tmp}/missing/flight.gif"], ["missing", "does not exist"]),
     (["--fps", "60", "-o", "{tmp}/flight.gif"], ["60 frames per second", "at most 50"]),
-    (["--max-frames", "1"], ["--max-frames", "expected a whole number >= 2"]),
-    (["--speed", "0"], ["--speed", "expected a number > 0"]),
+    (["--max-frames", "1"], ["--max-frames", "expected a whole number from 2 to 10,000"]),
+    (["--speed", "0"], ["--speed", "expected from 0.01 to 1,000"]),
 ])
 def test_bad_flags_are_one_line_exit_2(flown, tmp_path, args, fragments):
     args = [arg.format(tmp=tmp_path) for arg in args]

@@ -114,6 +114,9 @@ def test_worlds_lists_every_built_in_world_and_its_parameters():
     for name in ("forest", "window", "maze", "empty"):
         assert f"\n{name}" in "\n" + result.stdout
     assert "density=" in result.stdout and "seed=" in result.stdout
+    # Every parameter's range, e.g. the forest's size and branches:
+    assert "WxDxH of the map, metres; each from 2 to 10,000 m" in result.stdout
+    assert "mean number of branches per trunk; from 0 to 5" in result.stdout
 
 
 def test_clip_warning_is_one_line(tmp_path):
@@ -128,9 +131,10 @@ def test_clip_warning_is_one_line(tmp_path):
     (["map", "info", "nowhere.txt"], ["nowhere.txt: no such map file, and not a built-in world"]),
     (["map", "info", "forest:densty=3"], ["forest:densty=3", "densty"]),
     (["map", "info", "{bad}"], ["{bad}"]),
-    (["map", "check", "empty", "--margin", "-1"], ["--margin", "expected a margin >= 0 m"]),
+    (["map", "check", "empty", "--margin", "-1"], ["--margin", "expected from 0 to 100 m"]),
     (["map", "check", "empty", "--start", "1", "2"], ["--start", "expected 3 argument"]),
-    (["map", "check", "empty", "--start", "1", "2", "nan"], ["--start", "expected a finite number"]),
+    (["map", "check", "empty", "--start", "1", "2", "nan"],
+     ["--start", "expected from -10,000 to 10,000 m, got 'nan'"]),
     (["map", "check", "empty", "--margin", "100"], ["margin 100 m leaves no free space"]),
     (["map", "show", "empty", "-o", "map.xyz"], ["map.xyz: expected an image file name"]),
     (["map", "show", "empty", "-o", "no/such/dir/map.png"], ["does not exist"]),

@@ -92,9 +92,9 @@ def test_no_path_exits_1_with_metrics_only(tmp_path):
 
 @pytest.mark.parametrize(("args", "fragments"), [
     (["--params", "boeing"], ["boeing", "expected a vehicle preset"]),
-    (["--speed", "-2"], ["--speed", "expected a number > 0"]),
+    (["--speed", "-2"], ["--speed", "expected from 0.01 to 100 m/s"]),
     (["--physics-rate", "1500"], ["whole multiple of the control rate"]),
-    (["--settle", "-1"], ["--settle", "expected a number >= 0"]),
+    (["--settle", "-1"], ["--settle", "expected from 0 to 60 s"]),
     (["--gains", "/nonexistent/gains.toml"], ["/nonexistent/gains.toml", "cannot read"]),
     (["--start", "100", "0", "1"], ["start", "outside"]),
     (["--goal", "6", "6", "-1"], ["goal", "outside"]),

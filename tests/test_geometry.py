@@ -10,7 +10,7 @@ from hypothesis.extra.numpy import arrays
 
 from quadnav.errors import QuadnavError
 from quadnav.world import World
-from quadnav.world.geometry import union_volume
+from quadnav.world.volume import union_volume
 
 BOUNDARY = np.array([0.0, 0.0, 0.0, 10.0, 10.0, 10.0])
 
@@ -184,7 +184,7 @@ def test_union_volume_is_exact_for_integer_boxes():
         grid = np.zeros((12, 12, 12), dtype=bool)
         for b in boxes.astype(int):
             grid[b[0]:b[3], b[1]:b[4], b[2]:b[5]] = True
-        assert union_volume(boxes) == grid.sum()
+        assert union_volume(boxes, [0, 0, 0, 12, 12, 12]) == grid.sum()
 
 
 def test_sample_free_is_seeded_uniform_and_free():
@@ -220,5 +220,5 @@ def test_world_values_are_immutable():
     ({"boundary": BOUNDARY, "blocks": [[0, 0, 0, 1, 1, 1]], "colors": [[1, 0, 0]] * 2}, "colors must have shape"),
 ])
 def test_world_rejects_bad_values(kwargs, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(QuadnavError, match=message):
         World(**kwargs)

@@ -144,7 +144,7 @@ def test_diffdrive_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
         (("diffdrive", malformed, "--start", "1", "1", "0", "--goal", "9", "9"),
          "bad.map2d:2: rect: expected 4 numbers"),
         ((*DIFFDRIVE_FOREST, "--height", "9"), "slice height 9 m is outside"),
-        ((*DIFFDRIVE_FOREST, "--goal-radius", "-1"), "expected a number > 0"),
+        ((*DIFFDRIVE_FOREST, "--goal-radius", "-1"), "expected from 0.001 to 10,000 m"),
         ((*DIFFDRIVE_FOREST, "--bogus"), "unrecognized arguments: --bogus"),
         (("diffdrive", "forest", "--start", "1", "1", "0"), "required: --goal"),
     ])
@@ -154,7 +154,8 @@ def test_quadrotor_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
     assert_user_errors(tmp_path / "out", [
         (("quadrotor", "forest", "--start", *IN_TRUNK), "inside block 0"),
         (("quadrotor", "forest", "--goal", "30", "1", "1"), "outside the boundary"),
-        (("quadrotor", "forest", "--iterations", "0"), "max iterations must be >= 1"),
+        (("quadrotor", "forest", "--iterations", "0"),
+         "--iterations: expected a whole number from 1 to 1,000,000"),
     ])
     (tmp_path / "file").write_text("")
     assert_user_error(run("kino", *DIFFDRIVE_FOREST, "-o", tmp_path / "file"),

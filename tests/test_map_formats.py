@@ -55,8 +55,13 @@ def test_text_quirks_all_at_once():
     ("boundary 0 0 0 1 1 1\n\nblock 0 0 zero 1 1 1\n", "m.txt:3: block: expected a number, got 'zero'"),
     ("boundary 0 0 0 1 1 nan\n", "m.txt:1: boundary: expected a finite number"),
     ("boundary 0 0 0 1 1 inf\n", "m.txt:1: boundary: expected a finite number"),
-    ("boundary 0 0 0 1 1 1\nblock 0 0 0.5 1 1 0.5\n", "m.txt:2: block: expected zmin < zmax"),
-    ("boundary 2 0 0 1 1 1\n", "m.txt:1: boundary: expected xmin < xmax"),
+    ("boundary 0 0 0 1 1 0\n", "m.txt:1: boundary: zero thickness along z (zmin = zmax = 0): "
+                               "expected a box with a volume"),
+    ("boundary 0 0 0 1e5 1 1\n", "m.txt:1: boundary: expected coordinates from -10,000 to "
+                                 "10,000 m, got 100000"),
+    ("boundary 0 0 0 1e-4 1 1\n", "m.txt:1: boundary: the boundary is 0.0001 m along x: "
+                                  "expected sides from 0.001 to 20,000 m"),
+    ("boundary 0 0 0 1 1 1\nblock " + "1 " * 5000 + "\n", "m.txt:2: line of 10,0"),
     ("block 0 0 0 1 1 1\n", "m.txt: no 'boundary"),
     ("boundary 0 0 0 1 1 1\nboundary 0 0 0 2 2 2\n", "m.txt:2: a second boundary line (the first is line 1)"),
     ("boundary 0 0 0 1 1 1\nblock 0 0 0 1 1 1 300 0 0\n", "m.txt:2: block: expected colour values in 0..255"),
@@ -83,6 +88,58 @@ def test_blocks_inside_the_boundary_give_no_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         text("boundary 0 0 0 10 10 5\nblock 0 0 0 10 10 5\n")
+
+
+def warnings_and_world(parse, content: str):
+    """The MapWarning messages and the World of parsing ``content``."""
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        world = parse(content)
+    assert all(issubclass(w.category, MapWarning) for w in record)
+    return [str(w.message) for w in record], world
+
+
+def test_text_swapped_extents_are_read_as_the_box_between_with_a_warning():
+    messages, world = warnings_and_world(text, (
+        "boundary 10 0 0 0 10 5\n"               # x swapped
+        "block 1 1 3 2 2 0  # z swapped\n"
+        "block 4 9 0 3 8 5\n"                    # x and y swapped
+        "block 5 5 1 6 6 1\n"                    # zero thickness: dropped
+        "block 7 7 0 8 8 1\n"))
+    np.testing.assert_array_equal(world.boundary, [0, 0, 0, 10, 10, 5])
+    np.testing.assert_array_equal(world.blocks, [[1, 1, 0, 2, 2, 3], [3, 8, 0, 4, 9, 5],
+                                                 [7, 7, 0, 8, 8, 1]])
+    assert messages == [
+        "m.txt:1: boundary: min and max swapped (xmin 10 > xmax 0); read as the box "
+        "between them",
+        "m.txt:2: block: min and max swapped (zmin 3 > zmax 0); read as the box between them",
+        "m.txt:3: block: min and max swapped (xmin 4 > xmax 3, ymin 9 > ymax 8); read as "
+        "the box between them",
+        "m.txt:4: block: zero thickness along z (zmin = zmax = 1); dropped"]
+
+
+def test_json_swapped_extents_as_in_the_meam620_lab_maze_files():
+    # A thin wall written max first, as the current lab maze files have it.
+    messages, world = warnings_and_world(json_, (
+        '{"bounds": {"extents": [-2, 2, 3, -3, 0, 2]},\n'
+        ' "blocks": [\n'
+        '  {"extents": [-1.04, -1.06, -3, 1, 0, 2], "color": [1, 0, 0]},\n'
+        '  {"extents": [0.5, 0.5, -3, 3, 0, 2]},\n'
+        '  {"extents": [1, 1.5, 2, 2.5, 0, 1]}],\n'
+        ' "start": [-1.5, -2, 1], "goal": [1.5, 2, 1]}'))
+    np.testing.assert_array_equal(world.boundary, [-2, -3, 0, 2, 3, 2])
+    np.testing.assert_array_equal(world.blocks, [[-1.06, -3, 0, -1.04, 1, 2],
+                                                 [1, 2, 0, 1.5, 2.5, 1]])
+    np.testing.assert_array_equal(world.colors, [[1, 0, 0], [0.6, 0.6, 0.6]])
+    assert messages == [
+        "m.json:1: bounds: min and max swapped (ymin 3 > ymax -3); read as the box between "
+        "them",
+        "m.json:3: blocks[0]: min and max swapped (xmin -1.04 > xmax -1.06); read as the box "
+        "between them",
+        "m.json:4: blocks[1]: zero thickness along x (xmin = xmax = 0.5); dropped"]
+    # The wall is where the file meant it: a path through it collides, one round it does not.
+    assert not world.segment_free([-1.5, -2, 1], [-0.5, -2, 1])
+    assert world.segment_free([-1.5, 2, 1], [-0.5, 2, 1])
 
 
 # ----------------------------------------------------------------------------- JSON format
@@ -112,16 +169,20 @@ def test_json_fields_and_interleaved_extents():
     ('{"bounds": {"extents": [0, 1, 0, 1, 0, true]}}', "m.json:1: bounds.extents: expected a list of 6"),
     ('{"bounds": {"extents": [0, 1, 0, 1, 0, NaN]}}', "m.json:1: bounds.extents: expected a finite"),
     ('{"bounds": {"extents": [0, 1, 0, 1, 0, 1e999]}}', "m.json:1: bounds.extents: expected a finite"),
-    ('{"bounds": {"extents": [1, 0, 0, 1, 0, 1]}}', "m.json:1: bounds: expected xmin < xmax"),
+    ('{"bounds": {"extents": [1, 1, 0, 1, 0, 1]}}', "m.json:1: bounds: zero thickness along x"),
+    ('{"bounds": {"extents": [-1e154, 1e154, 0, 1, 0, 1]}}', "m.json:1: bounds: expected "
+                                                            "coordinates from -10,000"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"blocks": {}}', 'm.json:1: "blocks": expected a list'),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"blocks": [\n{"extents": [0, 1, 0, 1, 0, 1]},\n'
      '{"extent": [0, 1, 0, 1, 0, 1]}]}', 'm.json:4: blocks[1]: expected an object with "extents"'),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"blocks": [\n'
      '{"extents": [0, 1, 0, 1, 0, 1], "color": [255, 0, 0]}]}', "m.json:3: blocks[0].color: expected colour values in 0..1"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "start": [1, 2]}', "m.json:1: start: expected a list of 3"),
-    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "margin": -1}', "m.json:1: margin: expected a number >= 0"),
+    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "margin": -1}', "m.json:1: margin: expected from 0 to 100 m, got -1"),
+    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"goal": [1, 2, 3e4]}', "m.json:1: goal: expected coordinates from -10,000 to 10,000 m, got 30000"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "margin": "big"}', "m.json:1: margin: expected a number, got \"big\""),
-    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 1' + "0" * 400 + ']}}', "m.json:1: bounds.extents: number too large"),
+    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 1' + "0" * 400 + ']}}', "m.json:1: bounds.extents: expected a finite number"),
+    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 1' + "0" * 5000 + ']}}', "m.json:1: bounds.extents: expected a finite number"),
 ])
 def test_json_errors_name_file_line_and_expectation(content, expected):
     assert map_error(json_, content).startswith(expected)
@@ -201,6 +262,7 @@ def test_start_goal_file_variants():
     ("start: (0, 0, x)\ngoal: (1, 1, 1)", "sg.txt:1: start: expected a number, got 'x'"),
     ("begin: (0, 0, 0)", "sg.txt:1: expected 'start: (x, y, z)'"),
     ("start: (0, 0, 0)\nstart: (0, 0, 0)", "sg.txt:2: a second 'start' line"),
+    ("start: (0, 0, 0)\ngoal: (1, -2e4, 1)", "sg.txt:2: goal: expected coordinates from -10,000"),
 ])
 def test_start_goal_errors(content, expected):
     with pytest.raises(MapError) as info:

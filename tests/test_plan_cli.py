@@ -70,8 +70,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, shared_maps):
         (("window", "--start", *in_wall), "inside block 0"),
         ((shared_maps / "meam620" / "test_impossible.json",), "disconnected"),
         (("forest", "--planner", "dijkstra"), "unknown planner 'dijkstra'"),
-        (("forest", "--time", "-1"), "expected a number > 0"),
-        (("forest", "--seed", "x"), "expected a whole number"),
+        (("forest", "--time", "-1"), "expected above 0, at most 3,600 s"),
+        (("forest", "--seed", "x"), "expected a whole number from 0"),
         (("forest", "--goal-bias", "1.5"), "expected a number in [0, 1)"),
         (("nosuchmap.txt",), "nosuchmap.txt"),
     ]

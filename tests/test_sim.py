@@ -127,7 +127,10 @@ def test_slower_control_than_physics_still_tracks():
     ({"physics_rate": 1500.0}, "whole multiple"),
     ({"record_rate": 2000.0}, "must not exceed the control rate"),
     ({"goal_tolerance": 0.0}, "goal tolerance"),
-    ({"gust_std": -1.0}, "gust_std must be >= 0"),
+    ({"gust_std": -1.0}, "gust_std: expected from 0 to 100 N"),
+    ({"physics_rate": 1e9}, "physics rate: expected from 10 to 100,000 Hz"),
+    ({"settle_time": 1e9}, "settle time: expected from 0 to 60 s"),
+    ({"wind": [0.0, 1e300, 0.0]}, "wind: expected from -100 to 100 N"),
 ])
 def test_bad_settings_are_user_errors(changes, message):
     from quadnav.errors import QuadnavError

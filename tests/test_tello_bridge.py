@@ -320,8 +320,8 @@ def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, t
 
 def test_cli_bad_flags_are_one_line_errors(tmp_path):
     assert_user_error(run("tello", "fly", "forest", "--dry-run", "--speed", "2", "-o", tmp_path),
-                      "--speed", "at most 1 m/s")
-    for check, text, message in ((tello_speed, "0", "> 0"), (ipv4, "drone", "IPv4"),
+                      "--speed", "expected from 0.01 to 1 m/s")
+    for check, text, message in ((tello_speed, "0", "from 0.01 to 1 m/s"), (ipv4, "drone", "IPv4"),
                                  (ipv4, "192.168.10.256", "IPv4"), (percent, "120", "0..100"),
                                  (percent, "half", "whole percentage")):
         with pytest.raises(argparse.ArgumentTypeError, match=message):

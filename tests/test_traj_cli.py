@@ -36,10 +36,12 @@ def test_traj_bad_input_is_one_line_exit_2(tmp_path):
     bad.write_text("x,y,z\n1,1,1\n2,two,2\n")
     out = tmp_path / "out"
     cases = [
-        (("forest", "--path", bad), "bad.csv:3: expected three finite numbers"),
+        (("forest", "--path", bad), "bad.csv:3: expected three numbers x,y,z from -10,000 to "
+                                    "10,000 m, got '2,two,2'"),
+        (("forest", "--path", bad, "--dt", "1e-7"), "--dt: expected from 0.0001 to 1 s"),
         (("forest", "--path", tmp_path / "none.csv"), "none.csv: cannot read"),
         (("forest", "--path", bad, "--method", "bezier"), "invalid choice: 'bezier'"),
-        (("forest", "--path", bad, "--vmax", "0"), "expected a number > 0"),
+        (("forest", "--path", bad, "--vmax", "0"), "expected from 0.01 to 100 m/s"),
     ]
     for args, fragment in cases:
         assert_user_error(run("traj", *args, "-o", out), fragment)

@@ -108,8 +108,10 @@ def test_bad_settings_and_paths_are_user_errors():
         TrajectorySettings(method="spline")
     with pytest.raises(QuadnavError, match="need method minsnap"):
         TrajectorySettings(method="cubic", corridor=True)
-    with pytest.raises(QuadnavError, match="v_max must be a positive speed"):
+    with pytest.raises(QuadnavError, match=r"v_max: expected from 0\.005 to 100 m/s, got 0"):
         TrajectorySettings(v_max=0)
+    with pytest.raises(QuadnavError, match=r"a_max: expected from 0\.005 to 1,000 m/s"):
+        TrajectorySettings(a_max=1e-6)
     with pytest.raises(QuadnavError, match="at least 2 distinct waypoints"):
         make_trajectory([path[0], path[0]])
     through_trunk = np.array([world.start, world.blocks[0, :3] + 0.01, world.goal])

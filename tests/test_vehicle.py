@@ -70,6 +70,7 @@ def test_a_params_file_overrides_its_preset(tmp_path):
     ('based_on = "boeing"\n', "based_on must name a preset"),
     ("mass = 2.0\n", "not more than the weight"),
     ("mass = [\n", "not valid TOML"),
+    ("mass = " + "9" * 5000 + "\n", "not valid TOML: a number with too many digits"),
 ])
 def test_a_bad_params_file_names_the_file_and_the_problem(tmp_path, text, message):
     path = tmp_path / "bad.toml"

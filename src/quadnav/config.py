@@ -46,6 +46,8 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
     except tomllib.TOMLDecodeError as error:
         raise QuadnavError(f"{path}: not valid TOML: {error}") from None
+    except ValueError:  # int() refuses more than 4,300 digits
+        raise QuadnavError(f"{path}: not valid TOML: a number with too many digits") from None
 
 
 def _value(current: Any, raw: Any, where: str) -> Any:

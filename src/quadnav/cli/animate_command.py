@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from quadnav.cli.args import positive_float
+from quadnav.cli.args import number_in
 from quadnav.cli.progress import fraction_bar
+from quadnav.limits import Range
 from quadnav.report.rundir import read_run
 
 #: The animation's file name in DIR when no -o is given.
@@ -16,17 +17,10 @@ MAX_FRAMES = 150
 DEFAULT_FPS = 20.0
 #: Relative excess of the playback speed over --speed that is worth a note.
 SPEED_NOTE = 1.01
-
-
-def frame_count(text: str) -> int:
-    """argparse type: a whole number of frames >= 2."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {text!r}")
-    return value
+#: Ranges of --fps, --speed (flight seconds per second) and --max-frames.
+FPS = Range(0.0, 120.0, "frames per second", above_low=True)
+PLAYBACK = Range(0.01, 1000.0)
+FRAMES = Range(2, 10_000, whole=True)
 
 
 def animate(args: argparse.Namespace) -> int:
@@ -61,12 +55,14 @@ def add_animate_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", metavar="FILE",
                    help="the animation to write, ending in .gif or .mp4 (default: "
                         f"DIR/{DEFAULT_NAME})")
-    p.add_argument("--fps", type=positive_float, default=DEFAULT_FPS, metavar="N",
-                   help=f"frames per second (default: {DEFAULT_FPS:g}; a GIF rounds it so "
-                        "that a frame lasts whole hundredths of a second, at least two)")
-    p.add_argument("--speed", type=positive_float, default=1.0, metavar="X",
-                   help="flight seconds per second of animation (default: 1, real time)")
-    p.add_argument("--max-frames", type=frame_count, default=MAX_FRAMES, metavar="N",
-                   help=f"most frames drawn (default: {MAX_FRAMES})")
+    p.add_argument("--fps", type=number_in(FPS), default=DEFAULT_FPS, metavar="N",
+                   help=f"frames per second, {FPS.describe()} (default: {DEFAULT_FPS:g}; a "
+                        "GIF rounds it so that a frame lasts whole hundredths of a second, "
+                        "at least two)")
+    p.add_argument("--speed", type=number_in(PLAYBACK), default=1.0, metavar="X",
+                   help=f"flight seconds per second of animation, {PLAYBACK.describe()} "
+                        "(default: 1, real time)")
+    p.add_argument("--max-frames", type=number_in(FRAMES), default=MAX_FRAMES, metavar="N",
+                   help=f"most frames drawn, {FRAMES.describe()} (default: {MAX_FRAMES})")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=animate)

@@ -1,68 +1,75 @@
-"""Arguments shared by several commands: MAP, --margin, --start/--goal."""
+"""Arguments shared by several commands: MAP, --margin, --start/--goal, and the argparse
+types of numbers, each checked against its stated range (:mod:`quadnav.limits`)."""
 
 from __future__ import annotations
 
 import argparse
-import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from quadnav.limits import (
+    ACCELERATION,
+    COORDINATE,
+    HEADING_DEGREES,
+    LENGTH,
+    MARGIN,
+    PLAN_ITERATIONS,
+    PLAN_TIME,
+    SEED,
+    SPEED,
+    TIME_SCALE,
+    Range,
+)
 from quadnav.planning import PlannerSettings, planner_names
 from quadnav.runfolder import check_output_folder
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
 
-def finite_float(text: str) -> float:
-    """argparse type: a finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return value
+def number_in(allowed: Range) -> Callable[[str], float]:
+    """An argparse type: a number in ``allowed`` (a whole number if it says so).
 
-
-def positive_float(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    value = finite_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
-
-
-def _at_least_zero(text: str, expected: str) -> float:
-    """A finite number >= 0 from ``text``; otherwise an error saying ``expected``."""
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
-    return value
-
-
-def nonnegative_float(text: str) -> float:
-    """argparse type: a finite number >= 0."""
-    return _at_least_zero(text, "a number >= 0")
-
-
-def natural(text: str) -> int:
-    """argparse type: an integer >= 0."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
-    return value
+    argparse puts the flag's name before the message, e.g. ``argument --speed: expected
+    from 0.01 to 100 m/s, got '1e9'``.
+    """
+    def parse(text: str) -> float:
+        try:
+            value = int(text) if allowed.whole else float(text)
+        except ValueError:
+            value = None
+        if value is None or value not in allowed:
+            raise argparse.ArgumentTypeError(f"expected {allowed.describe()}, got {text[:40]!r}")
+        return value
+    return parse
 
 
 def probability(text: str) -> float:
     """argparse type: a number in [0, 1)."""
-    value = finite_float(text)
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
     if not 0 <= value < 1:
-        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1), got {text[:40]!r}")
     return value
+
+
+#: --iterations and --improve of a path search: 0 (for --iterations: no cap of its own)
+#: or a number of samples.
+SAMPLES = Range(0, PLAN_ITERATIONS.high, whole=True)
+#: argparse types of the numbers several commands take.
+coordinate = number_in(COORDINATE)
+margin_value = number_in(MARGIN)
+seed_value = number_in(SEED)
+samples = number_in(SAMPLES)
+plan_time = number_in(PLAN_TIME)
+length = number_in(LENGTH)
+speed = number_in(SPEED)
+acceleration = number_in(ACCELERATION)
+heading_degrees = number_in(HEADING_DEGREES)
+time_scale = number_in(TIME_SCALE)
 
 
 def output_folder(path: str) -> Path:
@@ -70,11 +77,6 @@ def output_folder(path: str) -> Path:
     file is in the way or the folder cannot be written or created
     (:func:`~quadnav.runfolder.check_output_folder`)."""
     return check_output_folder(path)
-
-
-def margin_value(text: str) -> float:
-    """argparse type: a margin in metres, >= 0."""
-    return _at_least_zero(text, "a margin >= 0 m")
 
 
 def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
@@ -90,19 +92,22 @@ def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) ->
 def add_margin_argument(parser: argparse.ArgumentParser) -> None:
     """--margin M, defaulting to the map's own margin or DEFAULT_MARGIN."""
     parser.add_argument("--margin", type=margin_value, metavar="M",
-                        help="safety margin in metres (default: the map's own, "
+                        help=f"safety margin, {MARGIN.describe()} (default: the map's own, "
                              f"else {DEFAULT_MARGIN:g})")
 
 
-def add_start_goal_arguments(parser: argparse.ArgumentParser) -> None:
-    """--start X Y Z, --goal X Y Z and --start-goal FILE."""
-    parser.add_argument("--start", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
-                        help="start position in metres (default: the map's own)")
-    parser.add_argument("--goal", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
-                        help="goal position in metres (default: the map's own)")
-    parser.add_argument("--start-goal", metavar="FILE",
-                        help="RBE595 start/goal file with lines 'start: (x, y, z)', "
-                             "'goal: (x, y, z)'")
+def add_start_goal_arguments(parser: argparse.ArgumentParser, file: bool = True) -> None:
+    """--start X Y Z, --goal X Y Z and (if ``file``) --start-goal FILE."""
+    parser.add_argument("--start", nargs=3, type=coordinate, metavar=("X", "Y", "Z"),
+                        help=f"start position, each {COORDINATE.describe()} (default: the "
+                             "map's own)")
+    parser.add_argument("--goal", nargs=3, type=coordinate, metavar=("X", "Y", "Z"),
+                        help=f"goal position, each {COORDINATE.describe()} (default: the "
+                             "map's own)")
+    if file:
+        parser.add_argument("--start-goal", metavar="FILE",
+                            help="RBE595 start/goal file with lines 'start: (x, y, z)', "
+                                 "'goal: (x, y, z)'")
 
 
 def resolve_margin(args: argparse.Namespace, world: World) -> float:
@@ -132,19 +137,22 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
     defaults (``iterations`` 0: no cap; ``improve`` None: no limit)."""
     parser.add_argument("--planner", default="rrtstar", metavar="NAME",
                         help=f"one of {', '.join(planner_names())} (default: rrtstar)")
-    parser.add_argument("--time", type=positive_float, default=time, metavar="S",
-                        help=f"search time budget in seconds (default: {time:g})")
-    parser.add_argument("--seed", type=natural, default=0, metavar="N",
-                        help="random seed; the same seed gives the same result (default: 0)")
+    parser.add_argument("--time", type=plan_time, default=time, metavar="S",
+                        help=f"search time budget, {PLAN_TIME.describe()} (default: {time:g})")
+    parser.add_argument("--seed", type=seed_value, default=0, metavar="N",
+                        help="random seed, 0 to 2^63 - 1; the same seed gives the same result "
+                             "(default: 0)")
     budget = f"{iterations:,} samples" if iterations else "no cap"
-    parser.add_argument("--iterations", type=natural, default=iterations, metavar="N",
-                        help=f"stop after N samples in all; 0: no cap (default: {budget})")
+    parser.add_argument("--iterations", type=samples, default=iterations, metavar="N",
+                        help=f"stop after N samples in all, at most {PLAN_ITERATIONS.high:,}; "
+                             f"0: no cap but {PLAN_ITERATIONS.high:,} (default: {budget})")
     until = (f"{improve:,} samples after it" if improve is not None
              else "until the time or iteration budget ends")
-    parser.add_argument("--improve", type=natural, default=improve, metavar="N",
+    parser.add_argument("--improve", type=samples, default=improve, metavar="N",
                         help="once a first path is found, improve it for N more samples, "
-                             "then stop (rrtstar; the same seed then gives the same path "
-                             f"however fast the machine; default: {until})")
+                             f"at most {PLAN_ITERATIONS.high:,}, then stop (rrtstar; the same "
+                             "seed then gives the same path however fast the machine; "
+                             f"default: {until})")
 
 
 def planner_budget(args: argparse.Namespace) -> PlannerSettings:

@@ -6,20 +6,21 @@ import argparse
 import sys
 
 from quadnav.cli.args import (
+    acceleration,
     add_map_argument,
     add_margin_argument,
     add_planner_arguments,
     add_start_goal_arguments,
-    finite_float,
-    nonnegative_float,
+    number_in,
     output_folder,
     planner_budget,
-    positive_float,
     resolve_margin,
     resolve_start_goal,
+    speed,
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.gains import load_gains
+from quadnav.limits import ACCELERATION, FORCE, GUSTS, RATE, SETTLE, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
     DEFAULT_IMPROVE,
@@ -127,10 +128,11 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
-    p.add_argument("--speed", type=positive_float, default=DEFAULT_SPEED, metavar="V",
-                   help=f"top speed of the trajectory, m/s (default: {DEFAULT_SPEED:g})")
-    p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
-                   help=f"largest acceleration of the trajectory, m/s^2 "
+    p.add_argument("--speed", type=speed, default=DEFAULT_SPEED, metavar="V",
+                   help=f"top speed of the trajectory, {SPEED.describe()} "
+                        f"(default: {DEFAULT_SPEED:g})")
+    p.add_argument("--accel", type=acceleration, default=DEFAULT_ACCELERATION, metavar="A",
+                   help=f"largest acceleration of the trajectory, {ACCELERATION.describe()} "
                         f"(default: {DEFAULT_ACCELERATION:g})")
     p.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
                    help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
@@ -139,19 +141,22 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                    help="controller gains TOML file; keys it leaves out keep the gains tuned "
                         "for the vehicle")
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
-    p.add_argument("--physics-rate", type=positive_float, default=SimSettings.physics_rate,
-                   metavar="HZ", help="RK4 steps per second (default: 1000)")
-    p.add_argument("--control-rate", type=positive_float, default=SimSettings.control_rate,
-                   metavar="HZ", help="controller updates per second; the physics rate "
-                                      "must be a whole multiple (default: 1000)")
-    p.add_argument("--wind", nargs=3, type=finite_float, default=[0.0, 0.0, 0.0],
+    p.add_argument("--physics-rate", type=number_in(RATE), default=SimSettings.physics_rate,
+                   metavar="HZ", help=f"RK4 steps per second, {RATE.describe()} "
+                                      "(default: 1000)")
+    p.add_argument("--control-rate", type=number_in(RATE), default=SimSettings.control_rate,
+                   metavar="HZ", help=f"controller updates per second, {RATE.describe()}; the "
+                                      "physics rate must be a whole multiple (default: 1000)")
+    p.add_argument("--wind", nargs=3, type=number_in(FORCE), default=[0.0, 0.0, 0.0],
                    metavar=("FX", "FY", "FZ"),
-                   help="steady wind as a force on the vehicle, N, world frame (default: none)")
-    p.add_argument("--gusts", type=nonnegative_float, default=0.0, metavar="N",
-                   help="random gusts: standard deviation of a force per axis, N, redrawn "
-                        "every 0.2 s from the seed (default: 0)")
-    p.add_argument("--settle", type=nonnegative_float, default=SimSettings.settle_time, metavar="S",
-                   help="seconds flown after the trajectory ends (default: 2)")
+                   help=f"steady wind as a force on the vehicle, world frame, each "
+                        f"{FORCE.describe()} (default: none)")
+    p.add_argument("--gusts", type=number_in(GUSTS), default=0.0, metavar="N",
+                   help=f"random gusts: standard deviation of a force per axis, "
+                        f"{GUSTS.describe()}, redrawn every 0.2 s from the seed (default: 0)")
+    p.add_argument("--settle", type=number_in(SETTLE), default=SimSettings.settle_time,
+                   metavar="S", help=f"time flown after the trajectory ends, "
+                                     f"{SETTLE.describe()} (default: 2)")
     p.add_argument("--no-figures", action="store_true",
                    help=f"skip the figures and {REPORT} (faster, e.g. for batches of "
                         "runs; quadnav report DIR writes the report later)")

@@ -38,12 +38,15 @@ from tqdm import tqdm
 
 from quadnav.cli.args import (
     add_margin_argument,
-    finite_float,
+    add_start_goal_arguments,
+    coordinate,
+    length,
     margin_value,
-    natural,
+    number_in,
     output_folder,
-    positive_float,
+    plan_time,
     resolve_margin,
+    seed_value,
 )
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
@@ -59,6 +62,14 @@ from quadnav.kinodynamic.replay6dof import (
 from quadnav.kinodynamic.result import FloatArray, KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import MAP2D_SUFFIX, World2D, load_world2d
+from quadnav.limits import (
+    COORDINATE,
+    HEADING_RADIANS,
+    KINO_ITERATIONS,
+    LENGTH,
+    MARGIN,
+    PLAN_TIME,
+)
 from quadnav.runfolder import replaced_folder
 from quadnav.world import load_world
 
@@ -223,6 +234,7 @@ def diffdrive(args: argparse.Namespace) -> int:
         diffdrive_figure,
     )
 
+    HEADING_RADIANS.check(args.start[2], "argument --start: THETA")
     folder = output_folder(args.output)
     settings = settings_from(args)
     world, height = slice_for(args.map, args.height)
@@ -341,18 +353,21 @@ def quadrotor(args: argparse.Namespace) -> int:
 def _add_search_arguments(parser: argparse.ArgumentParser) -> None:
     """--seed, --iterations, --time, --unbiased, --goal-radius, --quiet, -o."""
     defaults = KinoSettings()
-    parser.add_argument("--seed", type=natural, default=defaults.seed, metavar="N",
-                        help="random seed; the same seed gives the same plan (default: 0)")
-    parser.add_argument("--iterations", type=natural, default=defaults.max_iterations,
-                        metavar="N", help="extensions tried at most "
-                                          f"(default: {defaults.max_iterations})")
-    parser.add_argument("--time", type=positive_float, default=defaults.time_limit,
-                        metavar="S", help="search time budget in seconds "
+    parser.add_argument("--seed", type=seed_value, default=defaults.seed, metavar="N",
+                        help="random seed, 0 to 2^63 - 1; the same seed gives the same plan "
+                             "(default: 0)")
+    parser.add_argument("--iterations", type=number_in(KINO_ITERATIONS),
+                        default=defaults.max_iterations, metavar="N",
+                        help=f"extensions tried at most, {KINO_ITERATIONS.describe()} "
+                             f"(default: {defaults.max_iterations})")
+    parser.add_argument("--time", type=plan_time, default=defaults.time_limit,
+                        metavar="S", help=f"search time budget, {PLAN_TIME.describe()} "
                                           f"(default: {defaults.time_limit:g})")
     parser.add_argument("--unbiased", action="store_true",
                         help="sample uniformly over the map instead of around the goal")
-    parser.add_argument("--goal-radius", type=positive_float, default=defaults.goal_radius,
-                        metavar="R", help="the goal region: metres around the goal "
+    parser.add_argument("--goal-radius", type=length, default=defaults.goal_radius,
+                        metavar="R", help=f"the goal region: metres around the goal, "
+                                          f"{LENGTH.describe()} "
                                           f"(default: {defaults.goal_radius:g})")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     parser.add_argument("-o", "--output", default="kino", metavar="DIR",
@@ -382,15 +397,18 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                    help="2D map file (.map2d: lines 'boundary xmin ymin xmax ymax' and "
                         "'rect xmin ymin xmax ymax'), or a 3D map file or built-in world "
                         "spec sliced at --height")
-    p.add_argument("--start", nargs=3, type=finite_float, required=True,
-                   metavar=("X", "Y", "THETA"), help="start position in metres and heading "
-                                                     "in radians")
-    p.add_argument("--goal", nargs=2, type=finite_float, required=True, metavar=("X", "Y"),
-                   help="centre of the goal region, metres")
-    p.add_argument("--height", type=finite_float, metavar="Z",
-                   help="slice height of a 3D map, metres (default: half way up its z range)")
+    p.add_argument("--start", nargs=3, type=coordinate, required=True,
+                   metavar=("X", "Y", "THETA"),
+                   help=f"start position, each {COORDINATE.describe()}, and heading, "
+                        f"{HEADING_RADIANS.describe()}")
+    p.add_argument("--goal", nargs=2, type=coordinate, required=True, metavar=("X", "Y"),
+                   help=f"centre of the goal region, each {COORDINATE.describe()}")
+    p.add_argument("--height", type=coordinate, metavar="Z",
+                   help=f"slice height of a 3D map, {COORDINATE.describe()} (default: half "
+                        "way up its z range)")
     p.add_argument("--margin", type=margin_value, default=0.0, metavar="M",
-                   help="clearance kept beyond the robot's radius, metres (default: 0)")
+                   help=f"clearance kept beyond the robot's radius, {MARGIN.describe()} "
+                        "(default: 0)")
     p.add_argument("--compare", action="store_true",
                    help="also run the other sampling (biased / unbiased) with the same seed")
     _add_search_arguments(p)
@@ -409,10 +427,7 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/kino.png).")
     p.add_argument("map", metavar="MAP",
                    help="map file (.txt or .json) or built-in world spec, e.g. forest:seed=3")
-    p.add_argument("--start", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
-                   help="start position in metres (default: the map's own)")
-    p.add_argument("--goal", nargs=3, type=finite_float, metavar=("X", "Y", "Z"),
-                   help="goal position in metres (default: the map's own)")
+    add_start_goal_arguments(p, file=False)
     add_margin_argument(p)
     _add_search_arguments(p)
     p.set_defaults(handler=quadrotor)

@@ -11,14 +11,15 @@ from quadnav.cli.args import (
     add_margin_argument,
     add_planner_arguments,
     add_start_goal_arguments,
+    length,
     output_folder,
     planner_budget,
-    positive_float,
     probability,
     resolve_margin,
     resolve_start_goal,
 )
 from quadnav.cli.progress import planning_bar
+from quadnav.limits import LENGTH
 from quadnav.planning import PlannerSettings, get_planner, make_problem
 from quadnav.planning import plan as run_planner
 from quadnav.planning.refine import refine
@@ -99,12 +100,14 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
     add_planner_arguments(p, time=DEFAULT_TIME_LIMIT, iterations=0, improve=None)
     p.add_argument("--first", action="store_true",
                    help="stop at the first solution instead of improving it")
-    p.add_argument("--step", type=positive_float, metavar="M",
-                   help="largest tree edge in metres (default: 5%% of the map's diagonal)")
+    p.add_argument("--step", type=length, metavar="M",
+                   help=f"largest tree edge, {LENGTH.describe()} (default: 5%% of the map's "
+                        "diagonal)")
     p.add_argument("--goal-bias", type=probability, default=PlannerSettings.goal_bias,
                    metavar="P", help="probability of sampling the goal (default: 0.05)")
-    p.add_argument("--goal-tolerance", type=positive_float, metavar="M",
-                   help="join the goal from vertices this close, metres (default: the step)")
+    p.add_argument("--goal-tolerance", type=length, metavar="M",
+                   help=f"join the goal from vertices this close, {LENGTH.describe()} "
+                        "(default: the step)")
     p.add_argument("--no-refine", action="store_true",
                    help="skip shortcut pruning and smoothing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -17,9 +17,10 @@ import math
 import time
 from collections.abc import Callable
 
-from quadnav.cli.args import finite_float, positive_float
+from quadnav.cli.args import coordinate, heading_degrees, time_scale
 from quadnav.cli.tello_fly_command import add_tello_fly_command
 from quadnav.hardware.sdk import DEFAULT_HOST
+from quadnav.limits import COORDINATE, HEADING_DEGREES, TIME_SCALE
 
 
 def emulate(args: argparse.Namespace) -> int:
@@ -49,15 +50,16 @@ def add_emulate_command(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--host", default=DEFAULT_HOST, metavar="IP",
                         help=f"IPv4 address of the emulated drone (default: {DEFAULT_HOST}); "
                              "this computer gets the other address of its /31 pair")
-    parser.add_argument("--start", nargs=3, type=finite_float, default=(0.0, 0.0, 0.0),
+    parser.add_argument("--start", nargs=3, type=coordinate, default=(0.0, 0.0, 0.0),
                         metavar=("X", "Y", "Z"),
-                        help="world position of the drone on the ground before takeoff, m "
-                             "(default: 0 0 0)")
-    parser.add_argument("--yaw", type=finite_float, default=0.0, metavar="DEG",
-                        help="world heading of the drone's nose at power-on, degrees "
-                             "counter-clockwise from world x (default: 0)")
-    parser.add_argument("--time-scale", type=positive_float, default=1.0, metavar="K",
-                        help="emulated seconds per wall-clock second (default: 1, real time)")
+                        help="world position of the drone on the ground before takeoff, each "
+                             f"{COORDINATE.describe()} (default: 0 0 0)")
+    parser.add_argument("--yaw", type=heading_degrees, default=0.0, metavar="DEG",
+                        help="world heading of the drone's nose at power-on, counter-clockwise "
+                             f"from world x, {HEADING_DEGREES.describe()} (default: 0)")
+    parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="K",
+                        help=f"emulated seconds per wall-clock second, {TIME_SCALE.describe()} "
+                             "(default: 1, real time)")
     parser.set_defaults(handler=emulate)
 
 

@@ -16,16 +16,18 @@ import math
 import sys
 
 from quadnav.cli.args import (
+    acceleration,
     add_map_argument,
     add_margin_argument,
     add_planner_arguments,
     add_start_goal_arguments,
-    finite_float,
+    heading_degrees,
+    number_in,
     output_folder,
     planner_budget,
-    positive_float,
     resolve_margin,
     resolve_start_goal,
+    time_scale,
 )
 from quadnav.cli.progress import planning_bar
 from quadnav.hardware.bridge import (
@@ -41,6 +43,7 @@ from quadnav.hardware.flight_plan import TRACKING_ALLOWANCE, NoPathError, plan_f
 from quadnav.hardware.link import TELLO_IP
 from quadnav.hardware.rc import RC_FULL_SPEED
 from quadnav.hardware.tello_log import LOG_NAME
+from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
 from quadnav.planning import get_planner
 from quadnav.runfolder import replaced_folder
@@ -60,13 +63,10 @@ _EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.STOPPED: EXIT_FAILED,
                Status.LINK_LOST: EXIT_LINK_LOST}
 
 
-def tello_speed(text: str) -> float:
-    """argparse type: a cruise speed in m/s, > 0 and at most the Tello's 1 m/s."""
-    value = positive_float(text)
-    if value > RC_FULL_SPEED:
-        raise argparse.ArgumentTypeError(f"expected at most {RC_FULL_SPEED:g} m/s (the "
-                                         f"Tello's go and rc limit), got {text!r}")
-    return value
+#: Cruise speeds, m/s: up to the Tello's go and rc limit.
+TELLO_SPEED = Range(SPEED.low, RC_FULL_SPEED, "m/s")
+#: argparse type of --speed.
+tello_speed = number_in(TELLO_SPEED)
 
 
 def ipv4(text: str) -> str:
@@ -149,14 +149,14 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--mode", choices=MODES, default="waypoints",
                    help="'go' moves through the path's corners, or 'rc' sticks at 20 Hz "
                         "following the trajectory (default: waypoints)")
-    p.add_argument("--yaw", type=finite_float, default=0.0, metavar="DEG",
-                   help="map heading the drone faces on the floor, degrees counter-clockwise "
-                        "from +x (default: 0, facing +x)")
+    p.add_argument("--yaw", type=heading_degrees, default=0.0, metavar="DEG",
+                   help="map heading the drone faces on the floor, counter-clockwise from "
+                        f"+x, {HEADING_DEGREES.describe()} (default: 0, facing +x)")
     p.add_argument("--speed", type=tello_speed, default=DEFAULT_SPEED, metavar="V",
-                   help=f"cruise speed, m/s, at most {RC_FULL_SPEED:g} "
-                        f"(default: {DEFAULT_SPEED:g})")
-    p.add_argument("--accel", type=positive_float, default=DEFAULT_ACCELERATION, metavar="A",
-                   help=f"largest acceleration of the trajectory, m/s^2 "
+                   help=f"cruise speed, {TELLO_SPEED.describe()} (the Tello's go and rc "
+                        f"limit; default: {DEFAULT_SPEED:g})")
+    p.add_argument("--accel", type=acceleration, default=DEFAULT_ACCELERATION, metavar="A",
+                   help=f"largest acceleration of the trajectory, {ACCELERATION.describe()} "
                         f"(default: {DEFAULT_ACCELERATION:g})")
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
     p.add_argument("--dry-run", action="store_true",
@@ -165,9 +165,10 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                    help=f"the drone's address (default: {TELLO_IP}, the Tello's own Wi-Fi)")
     p.add_argument("--min-battery", type=percent, default=MIN_BATTERY, metavar="PCT",
                    help=f"refuse to take off below this battery (default: {MIN_BATTERY} %%)")
-    p.add_argument("--time-scale", type=positive_float, default=1.0, metavar="K",
-                   help="drone seconds per wall-clock second: 1 for a real drone, the "
-                        "emulator's --time-scale for an emulated one (default: 1)")
+    p.add_argument("--time-scale", type=time_scale, default=1.0, metavar="K",
+                   help=f"drone seconds per wall-clock second, {TIME_SCALE.describe()}: 1 "
+                        "for a real drone, the emulator's --time-scale for an emulated one "
+                        "(default: 1)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("-o", "--output", default="tello_flight", metavar="DIR",
                    help="folder to write into, created if needed (default: tello_flight)")

@@ -5,12 +5,25 @@ from __future__ import annotations
 import argparse
 import json
 
+import numpy as np
+
 from quadnav.cli.args import (
+    acceleration,
     add_map_argument,
     add_margin_argument,
+    number_in,
     output_folder,
-    positive_float,
     resolve_margin,
+    speed,
+)
+from quadnav.limits import (
+    ACCELERATION,
+    MAX_DURATION,
+    MAX_SAMPLES,
+    SAMPLE_INTERVAL,
+    SPEED,
+    check_count,
+    check_duration,
 )
 from quadnav.runfolder import replaced_folder
 from quadnav.trajectory.export import mp_csv, trajectory_csv
@@ -39,8 +52,14 @@ def traj(args: argparse.Namespace) -> int:
                                   yaw=YawMode(args.yaw))
     world = load_world(args.map)
     path = read_path_csv(args.path)
+    shortest = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) / args.vmax
+    check_duration(shortest, "raise --vmax", at_least=True)
+    check_count(shortest / args.dt + 1, MAX_SAMPLES, f"a trajectory of at least "
+                f"{shortest:.6g} s sampled every {args.dt:g} s gives samples",
+                "raise --dt or --vmax")
     space = SafeSpace(world, resolve_margin(args, world))
     trajectory = make_trajectory(path, settings, space)
+    check_duration(trajectory.duration, "raise --vmax or --amax")
     # Clearance to the real blocks; a path may start on the boundary itself.
     limits = Limits(v_max=args.vmax, a_max=args.amax)
     report = feasibility(trajectory, space.legs_world, limits, dt=args.dt)
@@ -83,18 +102,21 @@ def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
     add_margin_argument(p)
     p.add_argument("--method", choices=METHODS, default="minsnap",
                    help="generator (default: minsnap)")
-    p.add_argument("--vmax", type=positive_float, default=DEFAULT_V_MAX, metavar="V",
-                   help=f"largest speed, m/s (default: {DEFAULT_V_MAX:g})")
-    p.add_argument("--amax", type=positive_float, default=DEFAULT_A_MAX, metavar="A",
-                   help=f"largest acceleration, m/s^2 (default: {DEFAULT_A_MAX:g})")
+    p.add_argument("--vmax", type=speed, default=DEFAULT_V_MAX, metavar="V",
+                   help=f"largest speed, {SPEED.describe()} (default: {DEFAULT_V_MAX:g})")
+    p.add_argument("--amax", type=acceleration, default=DEFAULT_A_MAX, metavar="A",
+                   help=f"largest acceleration, {ACCELERATION.describe()} "
+                        f"(default: {DEFAULT_A_MAX:g})")
     p.add_argument("--corridor", action="store_true",
                    help="minsnap as a QP inside safe corridors around the path")
     p.add_argument("--optimize-times", action="store_true",
                    help="optimise segment times for total time plus snap (minsnap)")
     p.add_argument("--yaw", choices=[m.value for m in YawMode], default="constant",
                    help="yaw reference (default: constant)")
-    p.add_argument("--dt", type=positive_float, default=DEFAULT_DT, metavar="S",
-                   help=f"sample interval of the CSV files, s (default: {DEFAULT_DT:g})")
+    p.add_argument("--dt", type=number_in(SAMPLE_INTERVAL), default=DEFAULT_DT, metavar="S",
+                   help=f"sample interval of the CSV files, {SAMPLE_INTERVAL.describe()} "
+                        f"(default: {DEFAULT_DT:g}); the trajectory may last at most "
+                        f"{MAX_DURATION:g} s and give at most {MAX_SAMPLES:,} samples")
     p.add_argument("-o", "--output", default="traj", metavar="DIR",
                    help="folder to write into, created if needed (default: traj)")
     p.set_defaults(handler=traj)

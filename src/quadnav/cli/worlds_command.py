@@ -8,12 +8,13 @@ from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC, describe_w
 
 
 def worlds(args: argparse.Namespace) -> int:
-    """Print every built-in world, a summary line, and its parameters with defaults."""
+    """Print every built-in world, a summary line, and its parameters with defaults and
+    ranges."""
     for info in describe_worlds():
         print(f"{info.name:<8}{info.summary}")
         width = max((len(p.name) + len(p.default) + 1 for p in info.params), default=0)
         for p in info.params:
-            print(f"    {p.name + '=' + p.default:<{width}}  {p.type:<6} {p.help}")
+            print(f"    {p.name + '=' + p.default:<{width}}  {p.type:<6} {p.help}; {p.range}")
         print()
     print(f"Use a world wherever a MAP is accepted, e.g. {DEFAULT_WORLD_SPEC}:seed=3 or "
           "forest:size=50x50x8,density=0.05,seed=3.")

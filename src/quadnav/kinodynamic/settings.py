@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
-from quadnav.errors import QuadnavError
+from quadnav.limits import KINO_ITERATIONS, LENGTH, PLAN_TIME, SEED, UNIT_INTERVAL, Range
+
+#: How long one sampled control may be held, s, and how many are sampled per extension.
+_DURATION = Range(1e-3, 10.0, "s")
+_CONTROLS = Range(1, 1000, whole=True)
 
 
 @dataclass(frozen=True)
@@ -38,22 +41,13 @@ class KinoSettings:
     controls_per_extension: int = 10
 
     def __post_init__(self) -> None:
-        checks = [
-            (self.max_iterations >= 1, f"max iterations must be >= 1, got {self.max_iterations}"),
-            (math.isfinite(self.time_limit) and self.time_limit > 0,
-             f"time limit must be > 0 s, got {self.time_limit}"),
-            (0 <= self.seed < 2**63, f"seed must be in [0, 2^63), got {self.seed}"),
-            (0 <= self.goal_bias <= 1, f"goal bias must be in [0, 1], got {self.goal_bias}"),
-            (math.isfinite(self.goal_radius) and self.goal_radius > 0,
-             f"goal radius must be > 0 m, got {self.goal_radius}"),
-            (math.isfinite(self.duration) and self.duration > 0,
-             f"control duration must be > 0 s, got {self.duration}"),
-            (self.controls_per_extension >= 1,
-             f"controls per extension must be >= 1, got {self.controls_per_extension}"),
-        ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        KINO_ITERATIONS.check(self.max_iterations, "max iterations")
+        PLAN_TIME.check(self.time_limit, "time limit")
+        SEED.check(self.seed, "seed")
+        UNIT_INTERVAL.check(self.goal_bias, "goal bias")
+        LENGTH.check(self.goal_radius, "goal radius")
+        _DURATION.check(self.duration, "control duration")
+        _CONTROLS.check(self.controls_per_extension, "controls per extension")
 
     def replace(self, **changes: object) -> KinoSettings:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""

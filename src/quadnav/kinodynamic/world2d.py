@@ -36,7 +36,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from quadnav.errors import MapError, QuadnavError
 from quadnav.world import World, load_world
-from quadnav.world.reading import decode_text, keyword_lines, parse_float
+from quadnav.world.reading import (
+    check_coordinates,
+    decode_text,
+    keyword_lines,
+    parse_float,
+    read_file,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -96,12 +102,16 @@ class World2D:
 
     @cached_property
     def world3d(self) -> World:
-        """The equivalent 3D world: every rectangle extruded over ``|z| <= SLAB``."""
+        """The equivalent 3D world: every rectangle, cut to the boundary (only the part
+        inside matters), extruded over ``|z| <= SLAB``."""
         def lift(boxes: FloatArray) -> FloatArray:
             n = len(boxes)
             return np.column_stack([boxes[:, :2], np.full(n, -SLAB), boxes[:, 2:],
                                     np.full(n, SLAB)])
-        return World(boundary=lift(self.boundary[None])[0], blocks=lift(self.rects),
+        rects = np.hstack([np.maximum(self.rects[:, :2], self.lower),
+                           np.minimum(self.rects[:, 2:], self.upper)])
+        rects = rects[np.all(rects[:, :2] < rects[:, 2:], axis=1)]
+        return World(boundary=lift(self.boundary[None])[0], blocks=lift(rects),
                      name=self.name)
 
     def inflate(self, margin: float) -> World2D:
@@ -201,7 +211,8 @@ def parse_map2d(text: str, source: str) -> World2D:
             raise MapError(source, f"a second boundary line (the first is line "
                            f"{boundary_line}): expected exactly one", number)
         else:
-            boundary, boundary_line = box, number
+            boundary = check_coordinates(box, source, number, keyword)
+            boundary_line = number
     if not saw_content:
         raise MapError(source, "empty map: expected a 'boundary' line and 'rect' lines")
     if boundary is None:
@@ -211,11 +222,7 @@ def parse_map2d(text: str, source: str) -> World2D:
 
 def read_map2d(path: str | Path) -> World2D:
     """A World2D from a 2D map file; MapError naming the file and line if bad."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as error:
-        raise MapError(str(path), f"cannot read: {error.strerror}") from None
-    return parse_map2d(decode_text(data, str(path)), str(path))
+    return parse_map2d(decode_text(read_file(path), str(path)), str(path))
 
 
 def load_world2d(source: str | Path | World, height: float | None = None) -> World2D:

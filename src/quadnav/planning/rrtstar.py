@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from quadnav.limits import PLAN_ITERATIONS
 from quadnav.planning.nodegrid import new_node_grid, rebuild
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.registry import Progress
@@ -150,7 +151,8 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     rotation = _frame(start, goal)
     origin, extent = world.lower.copy(), world.extent.copy()
     rng = np.random.default_rng(settings.seed)
-    limit = settings.max_iterations or np.iinfo(np.int64).max
+    cap = settings.max_iterations or PLAN_ITERATIONS.high  # also bounds the tree's memory
+    limit = cap
     stopped_by = None
     state = TreeState.empty(min(_INITIAL_CAPACITY, limit + 1))
     counts = np.zeros(3, dtype=np.int64)
@@ -171,7 +173,7 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
         if progress is not None:
             progress(min(now / settings.time_limit, 1.0), float(best[BEST_COST]))
         if counts[ITERATIONS] >= limit:
-            capped = limit == settings.max_iterations and time_to_first is None
+            capped = limit == cap and time_to_first is None
             stopped_by = "iterations" if capped else "improvement"
         elif now >= settings.time_limit:
             stopped_by = "time"
@@ -198,8 +200,7 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     tree = (state.nodes[:count].copy(), state.parent[:count].copy())
     if best[BEST_VERTEX] < 0:
         return PlanResult(NAME, False, np.zeros((0, 3)), *tree, stats, settings.seed,
-                          no_path_message(stats, settings.max_iterations,
-                                          settings.time_limit))
+                          no_path_message(stats, cap, settings.time_limit))
     search_path = state.path_to(int(best[BEST_VERTEX]))
     if not np.array_equal(search_path[-1], goal):
         search_path = np.vstack([search_path, goal])

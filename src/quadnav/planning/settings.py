@@ -7,12 +7,12 @@ One :class:`PlannerSettings` drives every planner; each uses the fields that app
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from quadnav.errors import QuadnavError
+from quadnav.limits import LENGTH, PLAN_ITERATIONS, PLAN_TIME, SEED, Range
 from quadnav.world.model import World
 
 #: Default wall-time budget of a search, s.
@@ -22,6 +22,8 @@ STEP_FRACTION = 0.05
 #: OMPL's default rewiring factor: the near radius is this times the smallest radius
 #: that keeps RRT* asymptotically optimal.
 DEFAULT_REWIRE_FACTOR = 1.1
+_REWIRE_FACTOR = Range(1.0, 100.0)
+_IMPROVE = Range(0, PLAN_ITERATIONS.high, whole=True)
 
 
 @dataclass(frozen=True)
@@ -29,8 +31,9 @@ class PlannerSettings:
     """How long and how a planner searches.
 
     Attributes:
-        time_limit: wall-time budget of the search, s (> 0).
-        max_iterations: stop after this many samples (``None``: only the time limit).
+        time_limit: wall-time budget of the search, s (:data:`~quadnav.limits.PLAN_TIME`).
+        max_iterations: stop after this many samples (``None``: only the time limit and
+            :data:`~quadnav.limits.PLAN_ITERATIONS`, the most any search takes).
         improve_iterations: once a first solution is found, stop after this many more
             samples (``None``: no such limit). With no ``max_iterations``, the search then
             takes as long as a first solution needs (within ``time_limit``) and is still
@@ -60,27 +63,18 @@ class PlannerSettings:
     informed: bool = True
 
     def __post_init__(self) -> None:
-        checks = [
-            (math.isfinite(self.time_limit) and self.time_limit > 0,
-             f"time limit must be a positive number of seconds, got {self.time_limit}"),
-            (self.max_iterations is None or self.max_iterations >= 1,
-             f"max iterations must be >= 1, got {self.max_iterations}"),
-            (self.improve_iterations is None or self.improve_iterations >= 0,
-             f"iterations after the first solution must be >= 0, got "
-             f"{self.improve_iterations}"),
-            (self.step is None or (math.isfinite(self.step) and self.step > 0),
-             f"step must be a positive number of metres, got {self.step}"),
-            (0 <= self.goal_bias < 1, f"goal bias must be in [0, 1), got {self.goal_bias}"),
-            (self.goal_tolerance is None
-             or (math.isfinite(self.goal_tolerance) and self.goal_tolerance > 0),
-             f"goal tolerance must be a positive number of metres, got {self.goal_tolerance}"),
-            (math.isfinite(self.rewire_factor) and self.rewire_factor >= 1,
-             f"rewire factor must be >= 1, got {self.rewire_factor}"),
-            (0 <= self.seed < 2**63, f"seed must be in [0, 2^63), got {self.seed}"),
-        ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        PLAN_TIME.check(self.time_limit, "time limit")
+        if self.max_iterations is not None:
+            PLAN_ITERATIONS.check(self.max_iterations, "max iterations")
+        if self.improve_iterations is not None:
+            _IMPROVE.check(self.improve_iterations, "iterations after the first solution")
+        SEED.check(self.seed, "seed")
+        for name in ("step", "goal_tolerance"):
+            if getattr(self, name) is not None:
+                LENGTH.check(getattr(self, name), name.replace("_", " "))
+        if not 0 <= self.goal_bias < 1:
+            raise QuadnavError(f"goal bias must be in [0, 1), got {self.goal_bias}")
+        _REWIRE_FACTOR.check(self.rewire_factor, "rewire factor")
 
     def replace(self, **changes: object) -> PlannerSettings:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""

@@ -6,9 +6,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from quadnav.config import frozen_vector, require, vector_field
+from quadnav.limits import FORCE, GUSTS, RATE, SEED, SETTLE
 from quadnav.vehicle.params import FloatArray
 
 
@@ -17,18 +16,20 @@ class SimSettings:
     """Rates, stopping rule, success rule and disturbances of a simulated flight.
 
     Attributes:
-        physics_rate: RK4 steps per second, Hz; a whole multiple of ``control_rate``.
-        control_rate: controller updates per second, Hz.
+        physics_rate: RK4 steps per second, Hz (:data:`~quadnav.limits.RATE`); a whole
+            multiple of ``control_rate``.
+        control_rate: controller updates per second, Hz (:data:`~quadnav.limits.RATE`).
         record_rate: samples kept in the flight record per second, Hz (at most the
             control rate; tracking metrics use every control step regardless).
-        settle_time: time flown after the trajectory ends, s.
+        settle_time: time flown after the trajectory ends, s (:data:`~quadnav.limits.SETTLE`).
         goal_tolerance: largest final distance from the goal that counts as reached, m.
         boundary_tolerance: how far the centre may stray outside the map's boundary
             before the flight counts as having left it, m (starts and goals may lie on
             the boundary itself).
-        wind: (3,) constant external force, N, world frame.
-        gust_std: standard deviation of a random external force per axis, N, redrawn
-            every ``gust_period`` s.
+        wind: (3,) constant external force, N, world frame (each in
+            :data:`~quadnav.limits.FORCE`).
+        gust_std: standard deviation of a random external force per axis, N
+            (:data:`~quadnav.limits.GUSTS`), redrawn every ``gust_period`` s.
         gust_period: s.
         position_noise: standard deviation of measured position noise per axis, m.
         velocity_noise: m/s.
@@ -54,21 +55,29 @@ class SimSettings:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "wind", frozen_vector(self.wind, 3))
-        ratio = self.physics_rate / self.control_rate if self.control_rate > 0 else 0.0
-        nonnegative = ("settle_time", "boundary_tolerance", "gust_std", "position_noise",
-                       "velocity_noise", "attitude_noise", "gyro_noise")
+        RATE.check(self.physics_rate, "physics rate")
+        RATE.check(self.control_rate, "control rate")
+        SETTLE.check(self.settle_time, "settle time")
+        GUSTS.check(self.gust_std, "gust_std")
+        SEED.check(self.seed, "seed")
+        for force in self.wind:
+            FORCE.check(float(force), "wind")
+        ratio = self.physics_rate / self.control_rate
+        nonnegative = ("boundary_tolerance", "position_noise", "velocity_noise",
+                       "attitude_noise", "gyro_noise")
         require([
-            (self.physics_rate > 0 and self.control_rate > 0 and self.record_rate > 0,
-             "rates must be > 0 Hz"),
+            (math.isfinite(self.record_rate) and self.record_rate > 0,
+             "the record rate must be > 0 Hz"),
             (ratio >= 1 and abs(ratio - round(ratio)) < 1e-9,
              f"the physics rate ({self.physics_rate:g} Hz) must be a whole multiple of the "
              f"control rate ({self.control_rate:g} Hz)"),
             (self.record_rate <= self.control_rate,
              f"the record rate ({self.record_rate:g} Hz) must not exceed the control rate "
              f"({self.control_rate:g} Hz)"),
-            (self.goal_tolerance > 0, f"goal tolerance must be > 0 m, got {self.goal_tolerance}"),
-            (self.gust_period > 0, f"gust period must be > 0 s, got {self.gust_period}"),
-            (bool(np.all(np.isfinite(self.wind))), "wind must be finite"),
+            (math.isfinite(self.goal_tolerance) and self.goal_tolerance > 0,
+             f"goal tolerance must be > 0 m, got {self.goal_tolerance}"),
+            (math.isfinite(self.gust_period) and self.gust_period > 0,
+             f"gust period must be > 0 s, got {self.gust_period}"),
         ] + [(math.isfinite(getattr(self, k)) and getattr(self, k) >= 0,
               f"{k} must be >= 0, got {getattr(self, k)}") for k in nonnegative])
 

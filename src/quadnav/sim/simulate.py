@@ -16,6 +16,7 @@ import numpy as np
 
 from quadnav.control.cascade import gain_arrays, new_memory
 from quadnav.control.gains import Gains
+from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
 from quadnav.sim import loop
 from quadnav.sim.collision import body_grid
 from quadnav.sim.flight import Ending, Flight
@@ -29,6 +30,28 @@ from quadnav.world.model import World
 CHUNK_SECONDS = 1.0
 _ENDINGS = {loop.COLLISION: Ending.COLLISION, loop.LEFT_BOUNDARY: Ending.LEFT_BOUNDARY,
             loop.DIVERGED: Ending.DIVERGED}
+
+
+def flight_steps(duration: float, settings: SimSettings) -> int:
+    """Control steps of a flight of a ``duration`` s trajectory and the settling time.
+
+    Raises:
+        QuadnavError: a trajectory over :data:`~quadnav.limits.MAX_DURATION`, or more
+            than :data:`~quadnav.limits.MAX_CONTROL_STEPS` control steps or
+            :data:`~quadnav.limits.MAX_PHYSICS_STEPS` physics steps; the message says
+            which flags lower them.
+    """
+    check_duration(duration, "fly faster (--speed)")
+    flight = duration + settings.settle_time
+    what = f"a {flight:.6g} s flight (trajectory and settling time, --settle)"
+    steps = int(np.ceil(flight * settings.control_rate - 1e-9)) + 1
+    check_count(steps, MAX_CONTROL_STEPS,
+                f"{what} at a control rate of {settings.control_rate:g} Hz gives control steps",
+                "lower --control-rate or --settle, or fly faster (--speed)")
+    check_count(steps * settings.substeps, MAX_PHYSICS_STEPS,
+                f"{what} at a physics rate of {settings.physics_rate:g} Hz gives physics steps",
+                "lower --physics-rate or --settle, or fly faster (--speed)")
+    return steps
 
 
 def reference_table(trajectory: Trajectory, dt: float, steps: int) -> FloatArray:
@@ -81,7 +104,7 @@ def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
     settings = settings or SimSettings()
     began = time.perf_counter()
     dt = 1.0 / settings.control_rate
-    steps = int(np.ceil((trajectory.duration + settings.settle_time) / dt - 1e-9)) + 1
+    steps = flight_steps(trajectory.duration, settings)
     references = reference_table(trajectory, dt, steps)
     forces, noise = _disturbances(settings, steps, dt)
     vehicle = vehicle_arrays(params)

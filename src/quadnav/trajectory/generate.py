@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
 from quadnav.errors import QuadnavError
+from quadnav.limits import ACCELERATION, SPEED, Range
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
@@ -46,6 +47,13 @@ LEG_SLOW_DOWN = 0.5
 _PEAK_SAMPLES = 4000
 #: Extra stretch, relative, beyond what the sampled peaks ask for.
 _STRETCH_ALLOWANCE = 1e-3
+#: Ranges of the collision checks' spacing, m, and of the refinement rounds.
+_SPACING = Range(1e-4, 1.0, "m")
+_ROUNDS = Range(0, 100, whole=True)
+#: Ranges of the speed and acceleration limits: the flags' (:mod:`quadnav.limits`), down
+#: to the legs' share of them.
+_SPEED = Range(LEG_SLOW_DOWN * SPEED.low, SPEED.high, SPEED.unit)
+_ACCELERATION = Range(LEG_SLOW_DOWN * ACCELERATION.low, ACCELERATION.high, ACCELERATION.unit)
 
 
 @dataclass(frozen=True)
@@ -54,9 +62,11 @@ class TrajectorySettings:
 
     Attributes:
         method: one of :data:`METHODS`.
-        v_max: largest speed, m/s: segment times come from a trapezoidal profile with it,
-            then all stretch alike until the trajectory's peak speed is within it.
-        a_max: largest acceleration, m/s^2, used the same way.
+        v_max: largest speed, m/s (:data:`~quadnav.limits.SPEED`): segment times come from
+            a trapezoidal profile with it, then all stretch alike until the trajectory's
+            peak speed is within it.
+        a_max: largest acceleration, m/s^2 (:data:`~quadnav.limits.ACCELERATION`), used
+            the same way.
         corridor: minimum snap as a QP kept inside safe corridors around the path
             (``minsnap`` only).
         optimize_times: re-allocate segment times to minimise snap cost plus
@@ -78,20 +88,17 @@ class TrajectorySettings:
     max_rounds: int = 10
 
     def __post_init__(self) -> None:
+        _SPEED.check(self.v_max, "v_max")
+        _ACCELERATION.check(self.a_max, "a_max")
+        _SPACING.check(self.spacing, "check spacing")
+        _ROUNDS.check(self.max_rounds, "max rounds")
         checks = [
             (self.method in METHODS,
              f"unknown trajectory method {self.method!r}; expected one of {', '.join(METHODS)}"),
-            (math.isfinite(self.v_max) and self.v_max > 0,
-             f"v_max must be a positive speed in m/s, got {self.v_max}"),
-            (math.isfinite(self.a_max) and self.a_max > 0,
-             f"a_max must be a positive acceleration in m/s^2, got {self.a_max}"),
             (not (self.corridor or self.optimize_times) or self.method == "minsnap",
              f"corridors and time optimisation need method minsnap, not {self.method!r}"),
             (math.isfinite(self.time_weight) and self.time_weight > 0,
              f"time weight must be > 0, got {self.time_weight}"),
-            (math.isfinite(self.spacing) and self.spacing > 0,
-             f"check spacing must be > 0 m, got {self.spacing}"),
-            (self.max_rounds >= 0, f"max rounds must be >= 0, got {self.max_rounds}"),
         ]
         for ok, message in checks:
             if not ok:

@@ -18,6 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PPoly
 
+from quadnav.limits import MAX_SAMPLES, check_count
+
 FloatArray = NDArray[np.float64]
 
 #: Below this horizontal speed, m/s, a travel-facing yaw follows the current segment's
@@ -173,9 +175,16 @@ class Trajectory:
         return np.where(flat, self.yaw0, np.arctan2(direction[..., 1], direction[..., 0]))
 
     def sample(self, dt: float) -> Samples:
-        """Samples every ``dt`` s from 0 to the end (the end included)."""
+        """Samples every ``dt`` s from 0 to the end (the end included).
+
+        Raises:
+            QuadnavError: more than :data:`~quadnav.limits.MAX_SAMPLES` samples.
+        """
         if not dt > 0:
             raise ValueError(f"dt must be > 0 s, got {dt}")
+        count = self.duration / dt + 1
+        check_count(count, MAX_SAMPLES, f"a {self.duration:.6g} s trajectory sampled every "
+                    f"{dt:g} s gives samples", "sample less often (--dt) or raise the speed")
         count = int(np.floor(self.duration / dt + 1e-9)) + 1
         t = np.arange(count) * dt
         if t[-1] < self.duration:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import csv
-import math
 from pathlib import Path
 
 import numpy as np
 
 from quadnav.errors import MapError
+from quadnav.limits import COORDINATE, MAX_WAYPOINTS
 from quadnav.world.model import FloatArray
+from quadnav.world.reading import check_line_length, decode_text, read_file
 
 #: The header ``quadnav plan`` writes and this reader expects.
 HEADER = ["x", "y", "z"]
@@ -19,17 +20,15 @@ def read_path_csv(path: str | Path) -> FloatArray:
     """Waypoints (N, 3), metres, from a path CSV (as ``quadnav plan`` writes it).
 
     Raises a one-line :class:`~quadnav.errors.MapError` naming the file and line for a
-    missing file, a wrong header, a row that is not three finite numbers, or fewer than
-    two rows.
+    missing file, a wrong header, a row that is not three numbers within
+    :data:`~quadnav.limits.COORDINATE`, fewer than two rows or more than
+    :data:`~quadnav.limits.MAX_WAYPOINTS`.
     """
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except OSError as error:
-        raise MapError(source, f"cannot read: {error.strerror}") from None
-    except UnicodeDecodeError:
-        raise MapError(source, "expected a text CSV file") from None
-    rows = [(n, row) for n, row in enumerate(csv.reader(text.splitlines()), start=1)
+    lines = decode_text(read_file(path), source).splitlines()
+    for number, line in enumerate(lines, start=1):
+        check_line_length(line, source, number)
+    rows = [(n, row) for n, row in enumerate(csv.reader(lines), start=1)
             if row and any(cell.strip() for cell in row)]
     if not rows or [cell.strip().lower() for cell in rows[0][1]] != HEADER:
         raise MapError(source, "expected the header line 'x,y,z'", rows[0][0] if rows else 1)
@@ -39,9 +38,12 @@ def read_path_csv(path: str | Path) -> FloatArray:
             values = [float(cell) for cell in row]
         except ValueError:
             values = []
-        if len(values) != 3 or not all(math.isfinite(v) for v in values):
-            raise MapError(source, f"expected three finite numbers x,y,z, got {','.join(row)!r}",
-                           line)
+        if len(values) != 3 or not all(v in COORDINATE for v in values):
+            raise MapError(source, f"expected three numbers x,y,z {COORDINATE.describe()}, "
+                           f"got {','.join(row)[:60]!r}", line)
+        if len(points) == MAX_WAYPOINTS:
+            raise MapError(source, f"more than {MAX_WAYPOINTS:,} waypoints: expected at most "
+                           f"{MAX_WAYPOINTS:,}", line)
         points.append(values)
     if len(points) < 2:
         raise MapError(source, f"expected at least 2 waypoints, got {len(points)}")

@@ -160,6 +160,15 @@ def grid_point_free(x, y, z, grid) -> bool:
     return True
 
 
+@njit(cache=True, parallel=True)
+def grid_points_free(points, grid):
+    """Batch :func:`grid_point_free`: points (N, 3) float64 -> bool (N,)."""
+    out = np.empty(points.shape[0], dtype=np.bool_)
+    for k in prange(points.shape[0]):
+        out[k] = grid_point_free(points[k, 0], points[k, 1], points[k, 2], grid)
+    return out
+
+
 @njit(cache=True)
 def _segments_free_range(segments, grid, out, first, stop):
     """``out[k]`` = whether segment ``k`` (of (N, 2, 3)) is free, for k in [first, stop)."""

@@ -8,8 +8,9 @@
 
 Extents interleave min and max per axis; colours are 0-1 and optional; ``blocks``,
 ``start``, ``goal`` and ``margin`` are optional, other keys (``resolution``,
-``expected_path_length``, ``timeout``, ...) are ignored. Error messages name the line
-where the offending JSON object begins.
+``expected_path_length``, ``timeout``, ...) are ignored. A min above its max is read as
+the box between them, with a warning. Error messages name the line where the offending
+JSON object begins.
 """
 
 from __future__ import annotations
@@ -22,7 +23,15 @@ from typing import Any
 
 from quadnav.errors import MapError
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
-from quadnav.world.reading import assemble_world, check_box, check_color, check_finite
+from quadnav.world.reading import (
+    assemble_world,
+    check_block_count,
+    check_color,
+    check_coordinates,
+    check_finite,
+    check_margin,
+    read_box,
+)
 from quadnav.world.textmap import format_number
 
 
@@ -34,7 +43,9 @@ class _LocatedDict(dict):
 
 def _decode_with_lines(text: str) -> Any:
     """json.loads, but every object is a _LocatedDict carrying its 1-based line."""
-    decoder = json.JSONDecoder()
+    # Integers become floats as they are read: every number in a map is used as one, and
+    # int() refuses more than 4,300 digits.
+    decoder = json.JSONDecoder(parse_int=float)
     newlines = [i for i, char in enumerate(text) if char == "\n"]
 
     def parse_object(s_and_end: tuple[str, int], *args: Any) -> tuple[dict, int]:
@@ -60,10 +71,7 @@ def _number(value: Any, source: str, line: int | None, what: str) -> float:
     """``value`` as a finite float, or a MapError."""
     if not _is_number(value):
         raise MapError(source, f"{what}: expected a number, got {json.dumps(value)[:60]}", line)
-    try:
-        return check_finite(float(value), source, line, what)
-    except OverflowError:
-        raise MapError(source, f"{what}: number too large", line) from None
+    return check_finite(float(value), source, line, what)
 
 
 def _numbers(value: Any, count: int, source: str, line: int | None, what: str) -> list[float]:
@@ -74,13 +82,14 @@ def _numbers(value: Any, count: int, source: str, line: int | None, what: str) -
     return [_number(v, source, line, what) for v in value]
 
 
-def _box(obj: Any, source: str, what: str) -> list[float]:
-    """The box of ``{"extents": [xmin, xmax, ymin, ymax, zmin, zmax]}`` as min/max rows."""
+def _box(obj: Any, source: str, what: str, boundary: bool = False) -> list[float] | None:
+    """The box of ``{"extents": [xmin, xmax, ymin, ymax, zmin, zmax]}`` as min/max rows
+    (see :func:`~quadnav.world.reading.read_box`; ``None``: a dropped block)."""
     if not isinstance(obj, dict) or "extents" not in obj:
         raise MapError(source, f'{what}: expected an object with "extents"',
                        _line(obj))
     e = _numbers(obj["extents"], 6, source, _line(obj), f"{what}.extents")
-    return check_box([e[0], e[2], e[4], e[1], e[3], e[5]], source, _line(obj), what)
+    return read_box([e[0], e[2], e[4], e[1], e[3], e[5]], source, _line(obj), what, boundary)
 
 
 def parse_json_map(text: str, source: str) -> World:
@@ -99,26 +108,29 @@ def parse_json_map(text: str, source: str) -> World:
     if "bounds" not in data:
         raise MapError(source, 'missing key "bounds": expected {"bounds": {"extents": '
                        "[xmin, xmax, ymin, ymax, zmin, zmax]}}", _line(data))
-    boundary = _box(data["bounds"], source, "bounds")
+    boundary = _box(data["bounds"], source, "bounds", boundary=True)
     raw_blocks = data.get("blocks", [])
     if not isinstance(raw_blocks, list):
         raise MapError(source, '"blocks": expected a list of objects', _line(data))
+    check_block_count(len(raw_blocks), source, _line(data))
     blocks, colors, lines = [], [], []
     for i, obj in enumerate(raw_blocks):
-        blocks.append(_box(obj, source, f"blocks[{i}]"))
+        box = _box(obj, source, f"blocks[{i}]")
         rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
                        f"blocks[{i}].color")
-        colors.append(check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color"))
-        lines.append(_line(obj))
+        color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color")
+        if box is not None:
+            blocks.append(box)
+            colors.append(color)
+            lines.append(_line(obj))
     extras: dict[str, Any] = {}
     for key in ("start", "goal"):
         if key in data:
-            extras[key] = _numbers(data[key], 3, source, _line(data), key)
+            point = _numbers(data[key], 3, source, _line(data), key)
+            extras[key] = check_coordinates(point, source, _line(data), key)
     if "margin" in data:
-        margin = _number(data["margin"], source, _line(data), "margin")
-        if margin < 0:
-            raise MapError(source, f"margin: expected a number >= 0, got {margin:g}", _line(data))
-        extras["margin"] = margin
+        extras["margin"] = check_margin(_number(data["margin"], source, _line(data), "margin"),
+                                        source, _line(data))
     return assemble_world(source, boundary, blocks, colors, lines, **extras)
 
 

@@ -13,7 +13,7 @@ from quadnav.files import atomic_output
 from quadnav.world import builtin
 from quadnav.world.jsonmap import format_json_map, parse_json_map
 from quadnav.world.model import World
-from quadnav.world.reading import decode_text
+from quadnav.world.reading import decode_text, read_file
 from quadnav.world.textmap import format_text_map, parse_text_map
 
 
@@ -33,20 +33,19 @@ def parse_map(data: bytes, source: str) -> World:
 
 def read_map(path: str | Path) -> World:
     """A World from a text or JSON map file; MapError naming the file and line if bad."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as error:
-        raise MapError(str(path), f"cannot read: {error.strerror}") from None
-    return parse_map(data, str(path))
+    return parse_map(read_file(path), str(path))
 
 
 def load_world(source: str | Path | World) -> World:
     """A World from a map file path, a built-in world spec, or a World (returned as is)."""
     if isinstance(source, World):
         return source
-    path = Path(source)
-    if path.is_file():
-        return read_map(path)
+    try:
+        is_file = Path(source).is_file()
+    except OSError:  # e.g. a name too long to be a file: maybe a built-in world spec
+        is_file = False
+    if is_file:
+        return read_map(source)
     if builtin.is_builtin_spec(str(source)):
         return builtin.build_world(str(source))
     raise MapError(str(source), "no such map file, and not a built-in world "

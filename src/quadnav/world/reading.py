@@ -10,17 +10,45 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 
 import numpy as np
 
 from quadnav.errors import MapError, MapWarning
+from quadnav.limits import (
+    BOUNDARY_SIDE,
+    COORDINATE,
+    MARGIN,
+    MAX_BLOCKS,
+    MAX_FILE_BYTES,
+    MAX_LINE,
+)
 from quadnav.world.model import World
 
 AXES = "xyz"
 
 
+def read_file(path: str | Path) -> bytes:
+    """The bytes of a map, start/goal or path file; MapError if it cannot be read or is
+    over :data:`~quadnav.limits.MAX_FILE_BYTES`."""
+    try:
+        with Path(path).open("rb") as file:
+            data = file.read(MAX_FILE_BYTES + 1)
+    except OSError as error:
+        raise MapError(str(path), f"cannot read: {error.strerror}") from None
+    _check_size(len(data), str(path))
+    return data
+
+
+def _check_size(size: int, source: str) -> None:
+    if size > MAX_FILE_BYTES:
+        raise MapError(source, f"the file is over {MAX_FILE_BYTES // 2**20} MiB: expected "
+                       "a smaller map, start/goal or path file")
+
+
 def decode_text(data: bytes, source: str) -> str:
     """The bytes of a map file as text; one MapError if they are not UTF-8 text."""
+    _check_size(len(data), source)
     try:
         text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -36,6 +64,7 @@ def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
     """``(line number, keyword, value fields)`` for each line of a keyword map text that
     holds anything once ``#`` comments are removed; MapError for an unknown keyword."""
     for number, raw in enumerate(text.splitlines(), start=1):
+        check_line_length(raw, source, number)
         fields = raw.split("#", 1)[0].split()
         if not fields:
             continue
@@ -43,6 +72,13 @@ def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
             raise MapError(source, f"unknown keyword {fields[0]!r}: expected "
                            + " or ".join(repr(k) for k in keywords), number)
         yield number, fields[0], fields[1:]
+
+
+def check_line_length(line: str, source: str, number: int) -> None:
+    """MapError for a line longer than :data:`~quadnav.limits.MAX_LINE` characters."""
+    if len(line) > MAX_LINE:
+        raise MapError(source, f"line of {len(line):,} characters: expected at most "
+                       f"{MAX_LINE:,}", number)
 
 
 def parse_float(token: str, source: str, line: int, what: str) -> float:
@@ -61,17 +97,71 @@ def check_finite(value: float, source: str, line: int | None, what: str) -> floa
     return value
 
 
-def check_box(box: Sequence[float], source: str, line: int | None, what: str) -> list[float]:
-    """A box ``[xmin, ymin, zmin, xmax, ymax, zmax]`` whose mins are below its maxes."""
-    for axis in range(3):
-        if box[axis] >= box[axis + 3]:
-            raise MapError(
-                source,
-                f"{what}: expected {AXES[axis]}min < {AXES[axis]}max, "
-                f"got {box[axis]:g} >= {box[axis + 3]:g}",
-                line,
-            )
-    return list(box)
+def _where(source: str, line: int | None) -> str:
+    return source if line is None else f"{source}:{line}"
+
+
+def read_box(box: Sequence[float], source: str, line: int | None, what: str,
+             boundary: bool = False) -> list[float] | None:
+    """A box ``[xmin, ymin, zmin, xmax, ymax, zmax]`` from the numbers a map gives.
+
+    A min above its max on an axis (found in real course files) is read as the box
+    between the two values, with a :class:`MapWarning` naming the source and line. A
+    block of zero thickness on an axis is dropped with a warning (``None``); a boundary
+    of zero thickness, one with a side below :data:`~quadnav.limits.BOUNDARY_SIDE`, or
+    one with a coordinate outside :data:`~quadnav.limits.COORDINATE` is a MapError.
+    Block coordinates may be any finite numbers: blocks are clipped to the boundary.
+    """
+    lower = [min(box[a], box[a + 3]) for a in range(3)]
+    upper = [max(box[a], box[a + 3]) for a in range(3)]
+    swapped = [a for a in range(3) if box[a] > box[a + 3]]
+    if swapped:
+        details = ", ".join(f"{AXES[a]}min {box[a]:g} > {AXES[a]}max {box[a + 3]:g}"
+                            for a in swapped)
+        warnings.warn(f"{_where(source, line)}: {what}: min and max swapped ({details}); "
+                      "read as the box between them", MapWarning, stacklevel=2)
+    flat = [a for a in range(3) if lower[a] == upper[a]]
+    if flat:
+        axis = AXES[flat[0]]
+        thickness = f"zero thickness along {axis} ({axis}min = {axis}max = {lower[flat[0]]:g})"
+        if boundary:
+            raise MapError(source, f"{what}: {thickness}: expected a box with a volume", line)
+        warnings.warn(f"{_where(source, line)}: {what}: {thickness}; dropped", MapWarning,
+                      stacklevel=2)
+        return None
+    if boundary:
+        check_coordinates(lower + upper, source, line, what)
+        for a in range(3):
+            if upper[a] - lower[a] not in BOUNDARY_SIDE:
+                raise MapError(source, f"{what}: the boundary is {upper[a] - lower[a]:g} m "
+                               f"along {AXES[a]}: expected sides {BOUNDARY_SIDE.describe()}",
+                               line)
+    return lower + upper
+
+
+def check_coordinates(values: Sequence[float], source: str, line: int | None,
+                      what: str) -> list[float]:
+    """``values`` (e.g. a start or goal ``[x, y, z]``) if every one is in
+    :data:`~quadnav.limits.COORDINATE`; otherwise a MapError."""
+    for value in values:
+        if value not in COORDINATE:
+            raise MapError(source, f"{what}: expected coordinates {COORDINATE.describe()}, "
+                           f"got {value:g}", line)
+    return list(values)
+
+
+def check_margin(value: float, source: str, line: int | None) -> float:
+    """A map's margin, metres, in :data:`MARGIN`."""
+    if value not in MARGIN:
+        raise MapError(source, f"margin: expected {MARGIN.describe()}, got {value:g}", line)
+    return value
+
+
+def check_block_count(count: int, source: str, line: int | None) -> None:
+    """MapError once a map has more than :data:`MAX_BLOCKS` blocks."""
+    if count > MAX_BLOCKS:
+        raise MapError(source, f"more than {MAX_BLOCKS:,} blocks: expected at most "
+                       f"{MAX_BLOCKS:,}", line)
 
 
 def check_color(color: Sequence[float], scale: float, source: str, line: int | None,

@@ -12,7 +12,13 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import MapError
-from quadnav.world.reading import decode_text, parse_float
+from quadnav.world.reading import (
+    check_coordinates,
+    check_line_length,
+    decode_text,
+    parse_float,
+    read_file,
+)
 
 _LINE = re.compile(r"^\s*(start|goal)\s*:\s*\(?([^()]*)\)?\s*$", re.IGNORECASE)
 
@@ -21,6 +27,7 @@ def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
     """(start, goal), each (3,) metres, from the text of a start/goal file."""
     found: dict[str, np.ndarray] = {}
     for number, raw in enumerate(text.splitlines(), start=1):
+        check_line_length(raw, source, number)
         content = raw.split("#", 1)[0]
         if not content.strip():
             continue
@@ -35,7 +42,8 @@ def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
         if len(parts) != 3:
             raise MapError(source, f"{key}: expected 3 numbers (x, y, z), got {len(parts)}",
                            number)
-        found[key] = np.array([parse_float(p, source, number, key) for p in parts])
+        values = [parse_float(p, source, number, key) for p in parts]
+        found[key] = np.array(check_coordinates(values, source, number, key))
     for key in ("start", "goal"):
         if key not in found:
             raise MapError(source, f"no '{key}: (x, y, z)' line")
@@ -44,8 +52,4 @@ def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
 
 def read_start_goal(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """(start, goal), each (3,) metres, from an RBE595 start/goal file."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as error:
-        raise MapError(str(path), f"cannot read: {error.strerror}") from None
-    return parse_start_goal(decode_text(data, str(path)), str(path))
+    return parse_start_goal(decode_text(read_file(path), str(path)), str(path))

@@ -9,7 +9,8 @@
 Metres; colours 0-255. Accepted as found in the wild: blank lines, tabs, CRLF line
 ends, ``#`` comments (whole-line or trailing), ``%f``-style numbers such as
 ``2.000000``, the boundary line anywhere (even after the blocks), a boundary line with
-a colour (ignored), blocks without a colour, overlapping blocks.
+a colour (ignored), blocks without a colour, overlapping blocks, a min above its max
+(read as the box between them, with a warning).
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from quadnav.errors import MapError
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
 from quadnav.world.reading import (
     assemble_world,
-    check_box,
+    check_block_count,
     check_color,
     keyword_lines,
     parse_float,
+    read_box,
 )
 
 _FIELD_COUNTS = (6, 9)
@@ -45,18 +47,21 @@ def parse_text_map(text: str, source: str) -> World:
                 number,
             )
         numbers = [parse_float(v, source, number, keyword) for v in values]
-        box = check_box(numbers[:6], source, number, keyword)
         color = check_color(numbers[6:] or [c * 255 for c in DEFAULT_BLOCK_COLOR], 255,
                             source, number, keyword)
         if keyword == "boundary":
             if boundary is not None:
                 raise MapError(source, f"a second boundary line (the first is line "
                                f"{boundary_line}): expected exactly one", number)
-            boundary, boundary_line = box, number
+            boundary = read_box(numbers[:6], source, number, keyword, boundary=True)
+            boundary_line = number
         else:
-            blocks.append(box)
-            colors.append(color)
-            lines.append(number)
+            check_block_count(len(blocks) + 1, source, number)
+            box = read_box(numbers[:6], source, number, keyword)
+            if box is not None:
+                blocks.append(box)
+                colors.append(color)
+                lines.append(number)
     if not saw_content:
         raise MapError(source, "empty map: expected a 'boundary' line and 'block' lines")
     if boundary is None:

@@ -59,12 +59,15 @@ class ParamInfo:
         type: ``int``, ``float``, ``WxDxH`` or ``NxM``.
         default: the default as written in a spec, e.g. ``20x20x6``.
         help: one line, with units.
+        range: the values accepted (for each part of a size or grid), e.g.
+            ``from 2 to 10,000 m``.
     """
 
     name: str
     type: str
     default: str
     help: str
+    range: str
 
 
 @dataclass(frozen=True)
@@ -91,7 +94,9 @@ def describe_worlds() -> list[WorldInfo]:
     """Every built-in world with a summary and its parameters."""
     return [
         WorldInfo(g.name, g.summary, tuple(
-            ParamInfo(p.name, p.kind.label, p.format(p.default), p.help) for p in g.params))
+            ParamInfo(p.name, p.kind.label, p.format(p.default), p.help,
+                      ("each " if p.kind.parts > 1 else "") + p.range.describe())
+            for p in g.params))
         for g in _GENERATORS.values()
     ]
 

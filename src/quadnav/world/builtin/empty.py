@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from quadnav.world.builtin.base import Generator, Layout, corner_start_goal
-from quadnav.world.builtin.params import SIZE, Param
+from quadnav.world.builtin.params import SIZE, Param, sizes
 
 
 def _layout(values: dict[str, Any], rng: np.random.Generator) -> Layout:
@@ -19,6 +19,6 @@ def _layout(values: dict[str, Any], rng: np.random.Generator) -> Layout:
 GENERATOR = Generator(
     name="empty",
     summary="an empty box, start and goal near opposite corners",
-    params=(Param("size", SIZE, (10.0, 10.0, 4.0), "WxDxH of the map, metres", minimum=1.0),),
+    params=(Param("size", SIZE, (10.0, 10.0, 4.0), "WxDxH of the map, metres", sizes(1.0)),),
     layout=_layout,
 )

@@ -13,8 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.limits import Range
 from quadnav.world.builtin.base import FloatArray, Generator, Layout, corner_start_goal, shaded
-from quadnav.world.builtin.params import FLOAT, INT, SIZE, Param, SpecError
+from quadnav.world.builtin.params import FLOAT, SEED_PARAM, SIZE, Param, SpecError, sizes
 
 TRUNK_COLOR = (0.45, 0.3, 0.15)
 BRANCH_COLOR = (0.3, 0.55, 0.2)
@@ -139,14 +140,17 @@ GENERATOR = Generator(
     name="forest",
     summary="full-height tree trunks with thin branches; start and goal at opposite corners",
     params=(
-        Param("size", SIZE, (20.0, 20.0, 6.0), "WxDxH of the map, metres", minimum=2.0),
+        Param("size", SIZE, (20.0, 20.0, 6.0), "WxDxH of the map, metres", sizes(2.0)),
         Param("density", FLOAT, 0.1, "trunks per square metre of floor",
-              minimum=0.0, open_minimum=True),
-        Param("trunk_min", FLOAT, 0.3, "width of the thinnest trunk, metres", minimum=0.2),
-        Param("trunk_max", FLOAT, 0.6, "width of the thickest trunk, metres", minimum=0.2),
-        Param("gap", FLOAT, 0.8, "least clear gap between two trunks, metres", minimum=0.0),
-        Param("branches", FLOAT, 2.0, "mean number of branches per trunk", minimum=0.0),
-        Param("seed", INT, 0, "random seed", minimum=0),
+              Range(0.0, 10.0, "per m^2", above_low=True)),
+        Param("trunk_min", FLOAT, 0.3, "width of the thinnest trunk, metres",
+              Range(0.2, 100.0, "m")),
+        Param("trunk_max", FLOAT, 0.6, "width of the thickest trunk, metres",
+              Range(0.2, 100.0, "m")),
+        Param("gap", FLOAT, 0.8, "least clear gap between two trunks, metres",
+              Range(0.0, 100.0, "m")),
+        Param("branches", FLOAT, 2.0, "mean number of branches per trunk", Range(0.0, 5.0)),
+        SEED_PARAM,
     ),
     layout=_layout,
 )

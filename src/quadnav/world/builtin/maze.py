@@ -12,8 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.limits import Range
 from quadnav.world.builtin.base import FloatArray, Generator, Layout, plate_with_hole, shaded
-from quadnav.world.builtin.params import FLOAT, GRID, INT, Param, SpecError
+from quadnav.world.builtin.params import FLOAT, GRID, INT, SEED_PARAM, Param, SpecError
 
 WALL_COLOR = (0.6, 0.6, 0.62)
 SLAB_COLOR = (0.35, 0.45, 0.65)
@@ -121,13 +122,13 @@ GENERATOR = Generator(
     name="maze",
     summary="stacked grid mazes joined by a hole in each floor; climb from start to goal",
     params=(
-        Param("cells", GRID, (6, 6), "NxM cells on each level", minimum=1, maximum=200),
-        Param("levels", INT, 2, "number of levels", minimum=1, maximum=20),
+        Param("cells", GRID, (6, 6), "NxM cells on each level", Range(1, 200, whole=True)),
+        Param("levels", INT, 2, "number of levels", Range(1, 20, whole=True)),
         Param("cell_size", FLOAT, 2.0, "side of a cell, wall centre to wall centre, metres",
-              minimum=1.0),
+              Range(1.0, 50.0, "m")),
         Param("level_height", FLOAT, 2.5, "height of a level, slab centre to slab centre, metres",
-              minimum=1.0),
-        Param("seed", INT, 0, "random seed", minimum=0),
+              Range(1.0, 500.0, "m")),
+        SEED_PARAM,
     ),
     layout=_layout,
 )

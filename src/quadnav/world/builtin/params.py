@@ -1,7 +1,9 @@
 """Parameters of built-in worlds: declaring, parsing and formatting ``key=value`` lists.
 
 A value is an ``int``, a ``float``, a size ``WxDxH`` (three floats, metres) or a grid
-``NxM`` (two ints). A size or grid is a tuple; its bounds apply to every part.
+``NxM`` (two ints). A size or grid is a tuple; its range applies to every part. Every
+parameter has a stated range, checked before anything is built, so that no spec can
+ask for more than the machine has.
 """
 
 from __future__ import annotations
@@ -10,6 +12,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
+
+from quadnav.limits import COORDINATE, SEED, Range
 
 Value = Any  # int | float | tuple[float, float, float] | tuple[int, int]
 
@@ -82,37 +86,39 @@ class Param:
         kind: how the value is written.
         default: value used when the spec leaves the key out.
         help: one line for ``quadnav worlds``, with units.
-        minimum: every part must be ``>= minimum`` (``> minimum`` if ``open_minimum``).
-        maximum: every part must be ``<= maximum``.
+        range: the values every part may take.
     """
 
     name: str
     kind: Kind
     default: Value
     help: str
-    minimum: float | None = None
-    open_minimum: bool = False
-    maximum: float | None = None
+    range: Range
 
     def parse(self, text: str) -> Value:
-        """The value written as ``text``, checked against the bounds; SpecError if bad."""
+        """The value written as ``text``, checked against the range; SpecError if bad."""
         try:
             value = self.kind.parse(text)
         except ValueError as error:
             raise SpecError(f"{self.name}: {error}") from None
         parts = value if self.kind.parts > 1 else (value,)
-        subject = f"{self.name}: every part" if self.kind.parts > 1 else self.name
-        low, high = self.minimum, self.maximum
-        if low is not None and any(p < low or (self.open_minimum and p == low) for p in parts):
-            relation = ">" if self.open_minimum else ">="
-            raise SpecError(f"{subject} must be {relation} {_format_float(low)}, got {text}")
-        if high is not None and any(p > high for p in parts):
-            raise SpecError(f"{subject} must be <= {_format_float(high)}, got {text}")
+        if not all(part in self.range for part in parts):
+            every = "every part " if self.kind.parts > 1 else ""
+            raise SpecError(f"{self.name}: expected {every}{self.range.describe()}, got {text}")
         return value
 
     def format(self, value: Value) -> str:
         """``value`` as it would be written in a spec."""
         return self.kind.format(value)
+
+
+def sizes(least: float) -> Range:
+    """The range of a map's side: ``least`` to the coordinate range's 10 km, metres."""
+    return Range(least, COORDINATE.high, "m")
+
+
+#: The ``seed`` parameter of the worlds that draw their layout at random.
+SEED_PARAM = Param("seed", INT, 0, "random seed", SEED)
 
 
 def parse_values(params: Sequence[Param], text: str) -> dict[str, Value]:

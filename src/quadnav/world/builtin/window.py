@@ -6,8 +6,9 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.limits import Range
 from quadnav.world.builtin.base import Generator, Layout, corner_start_goal, plate_with_hole, shaded
-from quadnav.world.builtin.params import INT, SIZE, Param, SpecError
+from quadnav.world.builtin.params import INT, SEED_PARAM, SIZE, Param, SpecError, sizes
 
 WALL_COLOR = (0.75, 0.68, 0.55)
 #: Range of a wall's thickness (along y) and of a window's width and height, metres.
@@ -53,9 +54,9 @@ GENERATOR = Generator(
     summary="walls across the y axis, each with one window; start before, goal after",
     params=(
         Param("size", SIZE, (10.0, 20.0, 6.0), "WxDxH of the map, metres",
-              minimum=WINDOW_SIDE[1] + 2 * FRAME),
-        Param("walls", INT, 3, "number of walls", minimum=1, maximum=100),
-        Param("seed", INT, 0, "random seed", minimum=0),
+              sizes(WINDOW_SIDE[1] + 2 * FRAME)),
+        Param("walls", INT, 3, "number of walls", Range(1, 100, whole=True)),
+        SEED_PARAM,
     ),
     layout=_layout,
 )
