@@ -1,8 +1,9 @@
 """The safety margin is kept everywhere but on the legs out of it, checked exactly.
 
 Maps of our own making in the shapes that broke real course runs: 1 m corridors between
-long walls and the boundary with start and goal on the boundary, and a start and goal on
-the boundary each with a wall 0.1 m in front of it (a pocket narrower than the margin).
+long walls and the boundary with start and goal on the boundary, a start and goal on the
+boundary each with a wall 0.1 m in front of it (a pocket narrower than the margin), and a
+lab-maze file whose thin walls give their extents the wrong way round.
 Each is flown at 1, 2 and 3 m/s over 5 seeds: the trajectory keeps at least 95 % of the
 margin off the legs, measured exactly, and every flight reaches the goal with no contact.
 """
@@ -10,18 +11,19 @@ margin off the legs, measured exactly, and every flight reaches the goal with no
 from __future__ import annotations
 
 import itertools
+import json
 import warnings
 
 import numpy as np
 import pytest
 
-from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.errors import MapWarning, PlanningWarning, QuadnavError
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import make_problem
 from quadnav.planning.legs import find_leg
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.world import World
+from quadnav.world import World, load_world
 from quadnav.world.margins import box_margins, point_margins, polyline_margin
 
 MARGIN = 0.2
@@ -34,6 +36,13 @@ CORRIDORS = World(boundary=[0, 0, 0, 10, 5, 2], blocks=[[0, 1, 0, 8, 2, 2], [2, 
 POCKETS = World(boundary=[0, 0, 0, 8, 6, 3],
                 blocks=[[0.1, 2, 0, 1.5, 4, 3], [6.5, 2, 0, 7.9, 4, 3]],
                 start=[0, 3, 1.5], goal=[8, 3, 1.5], name="pockets")
+#: A maze-like lab map as MEAM620's current files write it: thin walls whose extents give
+#: min and max the wrong way round on an axis (read as the box between, with a warning).
+SWAPPED_JSON = json.dumps({
+    "bounds": {"extents": [0, 6, 0, 4, 0, 2]},
+    "blocks": [{"extents": [3.02, 2.98, 0.0, 3.0, 0.0, 2.0]},
+               {"extents": [1.52, 1.48, 4.0, 1.0, 0.0, 2.0]}],
+    "start": [0.0, 2.0, 1.0], "goal": [6.0, 2.0, 1.0], "margin": 0.2})
 SPEEDS = (1.0, 2.0, 3.0)
 SEEDS = range(5)
 
@@ -48,8 +57,20 @@ def _fly(world: World, speed: float, seed: int):
         return fly_mission(world, None, None, MARGIN, settings)
 
 
-@pytest.mark.parametrize("world", [CORRIDORS, POCKETS], ids=lambda w: w.name)
-def test_flights_keep_the_margin_off_the_legs_at_every_speed_and_seed(world):
+@pytest.fixture(scope="module")
+def swapped(tmp_path_factory) -> World:
+    path = tmp_path_factory.mktemp("maps") / "lab_maze.json"
+    path.write_text(SWAPPED_JSON)
+    with pytest.warns(MapWarning, match=r"lab_maze.json:\d+: blocks\[0\]: min and max swapped"):
+        world = load_world(path)
+    assert np.allclose(world.blocks, [[2.98, 0, 0, 3.02, 3, 2], [1.48, 1, 0, 1.52, 4, 2]])
+    return world.replace(name="swapped")
+
+
+@pytest.mark.parametrize("world", ["corridors", "pockets", "swapped"])
+def test_flights_keep_the_margin_off_the_legs_at_every_speed_and_seed(world, request):
+    world = {"corridors": CORRIDORS, "pockets": POCKETS}.get(world) or request.getfixturevalue(
+        world)
     worst = {}
     for speed, seed in itertools.product(SPEEDS, SEEDS):
         mission = _fly(world, speed, seed)

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from quadnav.limits import PLAN_ITERATIONS
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -140,9 +142,13 @@ def tree_edges(nodes: FloatArray, parents: IntArray) -> FloatArray:
 def no_path_message(stats: PlanStats, max_iterations: int | None, time_limit: float) -> str:
     """One line saying that a search found no path, which limit ended it and the
     command-line flag that lifts it."""
+    if stats.stopped_by == "iterations" and max_iterations is None:
+        return (f"no path found in {stats.iterations:,} samples ({stats.seconds:.3g} s), the "
+                "most a search may take; passages may be too narrow for the margin: try "
+                "quadnav map check, a smaller --margin or another --seed")
     if stats.stopped_by == "iterations":
         return (f"no path found: the search stopped at its cap of {max_iterations:,} samples "
                 f"after {stats.seconds:.3g} s of its {time_limit:g} s; raise --iterations "
-                "(0: no cap, the time budget alone)")
+                f"(at most {PLAN_ITERATIONS.high:,}; 0: the time budget alone)")
     return (f"no path found in {stats.seconds:.3g} s ({stats.iterations:,} samples): the "
             "time budget ran out; raise --time")
