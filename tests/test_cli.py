@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 import pytest
-from clitools import QUADNAV, assert_user_error, run
+from clitools import QUADNAV, assert_user_error, run, run_here
 
 from quadnav import __version__
 from quadnav.world import read_map
@@ -18,9 +18,11 @@ from quadnav.world import read_map
 def test_version_and_help():
     result = run("--version")
     assert result.returncode == 0 and result.stdout.strip() == f"quadnav {__version__}"
-    for command in ([], ["map"], ["map", "info"], ["map", "check"], ["map", "show"],
+    result = run("--help")
+    assert result.returncode == 0 and "usage: quadnav" in result.stdout
+    for command in (["map"], ["map", "info"], ["map", "check"], ["map", "show"],
                     ["map", "convert"], ["worlds"]):
-        result = run(*command, "--help")
+        result = run_here(*command, "--help")
         assert result.returncode == 0 and "usage: quadnav" in result.stdout, command
 
 
@@ -145,7 +147,7 @@ def test_clip_warning_is_one_line(tmp_path):
     ([], ["required"]),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, fragments):
-    result = run(*args, cwd=tmp_path)
+    result = run_here(*args, cwd=tmp_path)
     assert_user_error(result, *fragments)
     assert list(tmp_path.iterdir()) == []  # nothing half-written
 

@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run, run_here
 
 REQUIRED_METRICS = ("success", "collision", "reached_goal", "final_error_m", "path_length_m",
                     "trajectory_duration_s", "rms_tracking_error_m", "max_tracking_error_m",
@@ -101,7 +101,7 @@ def test_no_path_exits_1_with_metrics_only(tmp_path):
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, args, fragments):
     out = tmp_path / "out"
-    assert_user_error(run("fly", SMALL, *args, "-o", out), *fragments)
+    assert_user_error(run_here("fly", SMALL, *args, "-o", out), *fragments)
     assert not out.exists()
 
 

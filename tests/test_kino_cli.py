@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run, run_here
 
 from quadnav.kinodynamic.diffdrive import DiffDrive, propagate
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -125,7 +125,7 @@ def assert_user_errors(folder, cases) -> None:
     """Each case (args, *fragments) exits 2 with one line holding the fragments, and
     nothing is written."""
     for args, *fragments in cases:
-        assert_user_error(run("kino", *args, "-o", folder), *fragments)
+        assert_user_error(run_here("kino", *args, "-o", folder), *fragments)
     assert not folder.exists()
 
 

@@ -6,7 +6,7 @@ import csv
 import json
 
 import numpy as np
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run, run_here
 
 from quadnav.world import load_world
 
@@ -76,7 +76,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, shared_maps):
         (("nosuchmap.txt",), "nosuchmap.txt"),
     ]
     for args, fragment in cases:
-        assert_user_error(run("plan", *args, "--quiet", "-o", out), fragment)
+        assert_user_error(run_here("plan", *args, "--quiet", "-o", out), fragment)
     assert not out.exists()
     (tmp_path / "file").write_text("")
     assert_user_error(run("plan", "forest", "-o", tmp_path / "file"), "expected a folder")

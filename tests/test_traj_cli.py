@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run, run_here
 
 
 def test_plan_then_traj_writes_every_file(tmp_path):
@@ -44,7 +44,7 @@ def test_traj_bad_input_is_one_line_exit_2(tmp_path):
         (("forest", "--path", bad, "--vmax", "0"), "expected from 0.01 to 100 m/s"),
     ]
     for args, fragment in cases:
-        assert_user_error(run("traj", *args, "-o", out), fragment)
+        assert_user_error(run_here("traj", *args, "-o", out), fragment)
     good = tmp_path / "good.csv"
     good.write_text("x,y,z\n1,1,1\n19,19,3\n")  # straight through the trees
     assert_user_error(run("traj", "forest", "--path", good, "-o", out), "path segment 0 from (1, 1, 1) to (19, 19, 3) touches a block")
