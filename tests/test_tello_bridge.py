@@ -55,7 +55,7 @@ from quadnav.hardware.rc import (
 )
 from quadnav.world import World
 
-ALWAYS = lambda start, end: True  # noqa: E731  (a geofence that allows every move)
+ALWAYS = lambda start, end, segments: True  # noqa: E731  (a geofence that allows all)
 
 
 def land_on(moves: list[Move]) -> np.ndarray:
@@ -114,13 +114,13 @@ def test_a_short_last_step_becomes_a_detour_inside_the_fence():
     assert [m.command for m in moves] == ["go 300 0 0 50", f"go 10 5 {DETOUR_CM} 50",
                                           f"go 0 0 -{DETOUR_CM} 50"]
 
-    def below_ceiling(start, end):  # nothing above z = 10 cm: the detour goes down
+    def below_ceiling(start, end, segments):  # nothing above z = 10 cm: the detour goes down
         return max(start[2], end[2]) <= 10
 
     moves = go_moves([[0, 0, 0], [300, 0, 0], [310, 5, 0]], 50, below_ceiling)
     assert moves[1].z == -DETOUR_CM and land_on(moves).tolist() == [310, 5, 0]
 
-    def corridor(start, end):  # only forward along x, up to x = 310 cm
+    def corridor(start, end, segments):  # only forward along x, up to x = 310 cm
         return (start[1] == end[1] == 0 and start[2] == end[2] == 0
                 and start[0] <= end[0] <= 310)
 
@@ -216,6 +216,8 @@ def test_rc_sticks_are_percent_of_full_speed_with_the_sdk_signs():
     no_climb = StickRounder()
     assert no_climb([3.6, 2.2, 0.7], lambda s: s[2] == 0) == (4, 2, 0, 0)
     assert no_climb([3.6, 2.2, 0.7], lambda s: False) == (0, 0, 0, 0)
+    # Near the edge of what is allowed, sticks are halved rather than centred.
+    assert StickRounder()([30.0, 20.0, 0.0], lambda s: np.abs(s).max() <= 8) == (7, 5, 0, 0)
 
 
 def test_tracking_velocity_corrects_towards_the_reference_and_is_capped():
@@ -247,14 +249,15 @@ def test_the_plan_takes_off_under_the_start_and_lands_under_the_goal(course):
     _, start, goal, plan = course
     assert np.allclose(plan.takeoff_ground, [start[0], start[1], 0.0])
     assert np.allclose(plan.takeoff_point, [start[0], start[1], TAKEOFF_HEIGHT])
-    assert np.allclose(plan.route[0, :2], start[:2]) and np.allclose(plan.route[-1, :2], goal[:2])
+    route, pruned = plan.route.points, plan.pruned.points
+    assert np.allclose(route[0, :2], start[:2]) and np.allclose(route[-1, :2], goal[:2])
     assert np.allclose(plan.landing_ground, [goal[0], goal[1], 0.0])
     assert plan.problem.margin == pytest.approx(MARGIN + TRACKING_ALLOWANCE)
-    assert plan.fence.contains(plan.route).all() and plan.fence.contains(plan.pruned).all()
+    assert plan.fence.contains(route).all() and plan.fence.contains(pruned).all()
     assert np.allclose(plan.trajectory.position(0.0), plan.takeoff_point)
-    assert np.allclose(plan.trajectory.position(plan.trajectory.duration), plan.route[-1])
-    assert len(plan.pruned) < len(plan.route)
-    assert {tuple(p) for p in plan.pruned} <= {tuple(p) for p in plan.route}
+    assert np.allclose(plan.trajectory.position(plan.trajectory.duration), route[-1])
+    assert len(pruned) < len(route)
+    assert {tuple(p) for p in pruned} <= {tuple(p) for p in route}
 
 
 @pytest.mark.parametrize("height", [0.8, 0.63, 1.07, 0.15])  # 0.15: under the fence
@@ -262,7 +265,7 @@ def test_go_moves_start_at_the_reported_height_and_end_above_the_goal(course, he
     *_, plan = course
     moves = plan.go_moves(height, 50)
     end = to_cm([0.0, 0.0, height]) + land_on(moves)
-    assert end.tolist() == plan.frame.to_body_cm(plan.route[-1]).tolist()
+    assert end.tolist() == plan.frame.to_body_cm(plan.route.points[-1]).tolist()
     assert all(sdk.parse_command(m.command).name == "go" for m in moves)
 
 
@@ -307,7 +310,7 @@ def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, t
     # their sum is the trajectory's way (takeoff frame, yaw 0: right = -y) ...
     velocities = np.array([stick_velocity(s, 0.0) for s in sticks])
     flown = plan.takeoff_point + np.cumsum(velocities, axis=0) / 20
-    assert np.linalg.norm(flown[-1, :2] - plan.route[-1, :2]) <= GOAL_TOLERANCE
+    assert np.linalg.norm(flown[-1, :2] - plan.route.points[-1, :2]) <= GOAL_TOLERANCE
     # ... and a link lost after any one of them leaves the drone inside the fence, which
     # slows the flight down: 0.5 m/s is too fast for 15 s near the course's walls.
     bound = LostLinkBound(plan.fence)

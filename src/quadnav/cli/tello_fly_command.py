@@ -129,7 +129,10 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
         "fly", help="plan a flight as 'quadnav fly' does and fly it on a Tello",
         description="Plan a path through MAP as 'quadnav fly' does, with the margin plus "
                     f"{TRACKING_ALLOWANCE:g} m; check every move against the geofence (the "
-                    "map shrunk by the margin); then take off from the floor under the "
+                    "map shrunk by the margin; a start or goal inside the margin is left or "
+                    "entered by the planner's leg, which with the takeoff or landing column "
+                    "may come no closer to a block than the start or goal itself and never "
+                    "leave the boundary); then take off from the floor under the "
                     "start (the drone facing --yaw), fly it with 'go' moves (waypoints) or "
                     "'rc' sticks following the trajectory (rc; each stick slow enough that "
                     "a link lost for the Tello's 15 s keeps the drone inside the geofence), "

@@ -12,15 +12,17 @@ refused and nothing flies); ``takeoff``; then
   velocity plus a correction towards its position from the dead-reckoned estimate (a
   dry run's drone flies the sticks exactly; see :mod:`quadnav.hardware.rc`), each
   bounded so that a link lost right after it cannot carry the drone out of the geofence
-  (:mod:`quadnav.hardware.lost_link`; the trajectory is followed more slowly where that
+  (on a leg out of or into the margin: out of the leg's room; see
+  :mod:`quadnav.hardware.lost_link`; the trajectory is followed more slowly where that
   bound bites), until the estimate is within :data:`GOAL_TOLERANCE` of the trajectory's
   end horizontally (the landing is straight down), or :data:`RC_SETTLE` s after it; then
   the sticks are centred;
 
 then ``land``. **Safe stop**: a reply overdue by more than the link timeout, no state
 packet for that long, a refused command, a dead-reckoned position outside the geofence
-(``rc``) or a stop signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop``
-(hover) and then ``land``, resent up to three times; a landing counts as confirmed by
+(``rc``; on a leg, outside the leg's room, see :meth:`_Flight._region`) or a stop
+signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop`` (hover) and then
+``land``, resent up to three times; a landing counts as confirmed by
 its ``ok`` or by a state packet with the drone on the floor
 (:mod:`quadnav.hardware.landing`). Once the landing has begun, further stop signals are
 held until it is over (:mod:`quadnav.hardware.stop_signals`). **Landing by itself**: the
@@ -37,6 +39,7 @@ link timeout is wall-clock.
 
 from __future__ import annotations
 
+import io
 import logging
 import signal
 import sys
@@ -53,7 +56,7 @@ from quadnav.hardware.dead_reckoning import DeadReckoning
 from quadnav.hardware.drone_clock import Clock, VirtualClock
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
 from quadnav.hardware.frames import FloatArray
-from quadnav.hardware.geofence import GeofenceError
+from quadnav.hardware.geofence import GeofenceError, Region
 from quadnav.hardware.landing import Lander
 from quadnav.hardware.link import (
     LINK_TIMEOUT,
@@ -63,7 +66,14 @@ from quadnav.hardware.link import (
     Link,
     LinkLostError,
 )
-from quadnav.hardware.lost_link import HOLD, LostLinkBound, SlowedFlight, slowed_flight
+from quadnav.hardware.lost_link import (
+    HOLD,
+    LEG_CREEP,
+    LostLinkBound,
+    SlowedFlight,
+    run_length,
+    slowed_flight,
+)
 from quadnav.hardware.moves import MoveError, go_speed
 from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
 from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
@@ -93,6 +103,10 @@ RC_GAIN = 1.0
 GOAL_TOLERANCE = 0.05
 #: ... or this many drone seconds after the trajectory's end.
 RC_SETTLE = 3.0
+#: A dry ``rc`` flight that ends further than this from the trajectory's end horizontally,
+#: m, is refused: the goal tolerance, plus the run of one stick percent, as far as the
+#: drone stops short of a wall or block that a leg into the margin heads for.
+RC_REACH = GOAL_TOLERANCE + run_length(LEG_CREEP)
 #: djitellopy drops an ``rc`` command sent within 1 ms of the last: the highest rate, Hz.
 MAX_RC_WALL_RATE = 500.0
 #: File name of the figure of the flight in the output folder.
@@ -177,6 +191,8 @@ class _Flight:
         self.slowed, self.signals = slowed, signals
         self.lander = Lander(link, estimator, log, self._timeout, settings.link_timeout)
         self.if_lost = "stays on the floor"
+        self.left_start = False  # rc: the drone has left its start leg for the fence
+        self.rc_end = (0.0, np.zeros(3))  # rc: the last miss (m) and estimate (3,)
 
     # --- the sequence ------------------------------------------------------------------
 
@@ -271,7 +287,6 @@ class _Flight:
                         f"{HOLD:g} s of them stay inside the geofence)")
         trajectory, period, yaw = plan.trajectory, 1.0 / settings.rc_rate, plan.frame.yaw
         end = trajectory.position(trajectory.duration)
-        bound = LostLinkBound(plan.fence)
         rounder = StickRounder()
         began, ticks, tau, pace, t, finished = clock.now(), 0, 0.0, 0.0, 0.0, None
         flown = trajectory.position(0.0)  # a dry run's drone: flies the sticks exactly
@@ -285,20 +300,23 @@ class _Flight:
                 self._check_battery()
             reference = trajectory.position(tau)
             position = self.estimator.position() if link.reports_state else flown
-            if not plan.fence.point_ok(position):
+            region = self._region(tau, position)
+            if not region.point_ok(position):
                 raise GeofenceError(f"geofence: the dead-reckoned position "
-                                    f"{format_point(position)} left the fence at "
+                                    f"{format_point(position)} left {region.name} at "
                                     f"t = {t:.1f} s")
             miss = float(np.linalg.norm((position - end)[:2]))  # the landing is vertical
+            self.rc_end = (miss, position)
             if tau >= trajectory.duration:
                 finished = t if finished is None else finished
                 if miss <= GOAL_TOLERANCE or t >= finished + RC_SETTLE:
                     break
             velocity_ref = trajectory.velocity(tau)
-            pace = bound.pace(reference, velocity_ref)
+            pace = plan.reference_pace(tau)
+            bound = LostLinkBound(region)
             wanted = bound.limit(position, tracking_velocity(
                 reference, pace * velocity_ref, position, settings.rc_gain))
-            sticks = rounder(stick_values(wanted, yaw), lambda s, p=position: bound.is_safe(
+            sticks = rounder(stick_values(wanted, yaw), lambda s, p=position, b=bound: b.is_safe(
                 p, stick_velocity(s, yaw)))
             velocity = stick_velocity(sticks, yaw)
             self.estimator.expect(velocity)
@@ -311,6 +329,15 @@ class _Flight:
         return (f"{ticks} rc commands over {t:.1f} s (the trajectory takes "
                 f"{trajectory.duration:.1f} s; slowed where a lost link could otherwise "
                 f"leave the geofence; estimate {100 * miss:.0f} cm beside its end)")
+
+    def _region(self, tau: float, position: FloatArray) -> Region:
+        """Where the drone may be at trajectory time ``tau`` s, at ``position`` (3,) m:
+        where the trajectory may be then (:meth:`FlightPlan.region_at`), except that the
+        start's leg room holds until the drone, behind its reference, is in the fence."""
+        plan = self.plan
+        self.left_start = self.left_start or (
+            tau >= plan.trajectory.main_window[0] and plan.fence.point_ok(position))
+        return plan.region_at(tau) if self.left_start else plan.start_room
 
     def _check_battery(self) -> None:
         """AutoLandingError if the state packets say the battery is below the level at
@@ -395,18 +422,33 @@ def _tello_link(host: str, log: TelloLog, estimator: DeadReckoning,
 
 
 def rc_pace(plan: FlightPlan, settings: BridgeSettings) -> SlowedFlight:
-    """How the ``rc`` flight of ``plan`` is slowed by the lost-link bound.
+    """How the ``rc`` flight of ``plan`` is slowed by the lost-link bound, rehearsed in a
+    silent dry run (a drone that flies its sticks exactly).
 
     Raises:
-        RcModeError: somewhere the trajectory cannot be followed at any safe speed.
+        RcModeError: somewhere the trajectory cannot be followed at any safe speed, or the
+            rehearsal ends further than :data:`RC_REACH` from the trajectory's end (e.g.
+            where whole-percent sticks in a turned heading cannot run along a leg that
+            hugs a wall).
     """
-    slowed = slowed_flight(LostLinkBound(plan.fence), plan.trajectory, settings.rc_rate)
+    slowed = slowed_flight(plan.reference_pace, plan.trajectory, settings.rc_rate)
     if slowed.stalls:
         raise RcModeError(
             f"rc mode cannot fly this plan: at {format_point(slowed.where)} the trajectory "
             f"heads for the geofence so closely that no stick speed is safe if the link "
             f"dies (the Tello would fly on for {HOLD:g} s); nothing was sent (try --mode "
             "waypoints)")
+    log = TelloLog(io.StringIO())
+    rehearsal = _Flight(plan, DryRunLink(log, io.StringIO()), DeadReckoning(plan.frame),
+                        settings, VirtualClock(), log, slowed, StopSignals())
+    rehearsal._follow()
+    miss, where = rehearsal.rc_end
+    if miss > RC_REACH:
+        raise RcModeError(
+            f"rc mode cannot fly this plan: its sticks (whole percent in the drone's heading, "
+            f"each bounded for a lost link), flown exactly, get no further than "
+            f"{format_point(where)}, {100 * miss:.0f} cm from the trajectory's end; nothing "
+            "was sent (try --mode waypoints)")
     return slowed
 
 

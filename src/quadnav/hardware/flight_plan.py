@@ -1,37 +1,50 @@
 """What the Tello will fly, planned and checked before anything is sent.
 
-:func:`plan_flight` plans like ``quadnav fly`` (the same query check, planner, shortcut
-and smoothing, trajectory generator and settings), then shapes the result for a drone
-that starts and ends on the floor:
+:func:`plan_flight` plans like ``quadnav fly`` (the same query check, so it accepts and
+refuses the same starts and goals; the same planner, shortcut and smoothing, trajectory
+generator and settings), then shapes the result for a drone that starts and ends on the
+floor:
 
 * the drone stands on the floor under the start (see
   :class:`~quadnav.hardware.frames.TakeoffFrame`), takes off straight up to about
-  :data:`TAKEOFF_HEIGHT`, then moves straight up or down to the first waypoint's height;
-* the **route** is the refined path between its first and last vertex inside the
-  geofence (a start or goal on the floor lies in the margin, so its straight leg is
-  flown as the takeoff or landing instead), ending straight above the goal;
+  :data:`TAKEOFF_HEIGHT`, then moves straight up or down to the start's height;
+* the **route** (:class:`Route`) runs from there along the planner's start leg, the
+  planned path and the goal leg, ending at the goal; a leg's part in the floor's margin
+  (from a start or to a goal on the floor) is raised to the height where the leg leaves
+  the fence's floor, below which the takeoff and landing columns take over;
 * the drone lands straight down from there.
 
 The path is planned with the margin plus :data:`TRACKING_ALLOWANCE`, the geofence is the
 margin itself, so rounding to centimetres and tracking errors do not breach the fence.
-The trajectory (for ``rc`` mode and the plot) runs through the takeoff point and the
-route; the ``go`` moves run through the route *pruned* to the vertices a straight move
-needs. Every column, move and densely sampled trajectory point is checked against the
-geofence.
+Only the start's *zone* — the takeoff column, the climb or descent to the leg and the
+leg — and the goal's — the leg and the landing column — may come closer than the margin;
+they stay in the leg's room (:mod:`quadnav.hardware.leg_room`: never closer to a block
+than the start or goal itself, never outside the boundary, near a wall only where the leg
+is), everything else in the fence. The trajectory (for ``rc`` mode and the plot) runs
+through the takeoff point and the route, each zone flown straight from rest to rest at
+the generator's leg speed (unless it lies in the free space of the planning margin); the
+``go`` moves run through the route *pruned* to the vertices a straight move needs (every
+zone vertex kept), rounded to whole centimetres where the moves stay (see
+:meth:`FlightPlan.go_moves`). Every column, move and densely sampled trajectory point is
+checked, the zones' against their room, the rest against the fence.
 """
 
 from __future__ import annotations
 
+import itertools
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.hardware.frames import GROUND_Z, FloatArray, IntArray, TakeoffFrame, to_cm
-from quadnav.hardware.geofence import Geofence
-from quadnav.hardware.moves import Move, go_moves
+from quadnav.hardware.geofence import Geofence, Region
+from quadnav.hardware.leg_room import LegRoom
+from quadnav.hardware.lost_link import LostLinkBound, creeping_pace
+from quadnav.hardware.moves import Move, MoveError, go_moves
 from quadnav.planning import (
     PlannerSettings,
     PlanningProblem,
@@ -41,7 +54,12 @@ from quadnav.planning import (
     plan,
 )
 from quadnav.planning.refine import refine
-from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
+from quadnav.trajectory.generate import (
+    LEG_SLOW_DOWN,
+    TrajectorySettings,
+    concatenate,
+    make_trajectory,
+)
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace
 from quadnav.world.model import World
@@ -52,10 +70,36 @@ TAKEOFF_HEIGHT = 0.8
 TRACKING_ALLOWANCE = 0.1
 #: Largest distance between trajectory points checked against the fence, metres.
 CHECK_SPACING = 0.01
+#: The eight ways to round a point (3,) down or up on each axis.
+_ROUNDINGS = np.array(list(itertools.product((0.0, 1.0), repeat=3)))
 
 
 class NoPathError(QuadnavError):
     """The planner found no path within its budget."""
+
+
+@dataclass(frozen=True, eq=False)
+class Route:
+    """Waypoints (N, 3), map frame, m, with the start's and the goal's zones marked.
+
+    Attributes:
+        points: (N, 3) from the start (raised out of the floor's margin) to the goal
+            (likewise).
+        head: ``points[:head + 1]`` is the start's zone: its leg, ending where the
+            planner's search began.
+        tail: ``points[tail:]`` is the goal's zone: from where the search ended, its leg.
+            Between the zones the route is in the fence.
+    """
+
+    points: FloatArray
+    head: int
+    tail: int
+
+    def parts(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The start's zone, the part between the zones, the goal's zone (each (K, 3);
+        consecutive parts share their end points)."""
+        p = self.points
+        return p[:self.head + 1], p[self.head:self.tail + 1], p[self.tail:]
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,9 +111,10 @@ class FlightPlan:
         result: the planner's refined result (its path runs start -> goal).
         fence: the geofence, with the margin asked for.
         frame: where the drone stands before takeoff and which way it faces.
-        route: (N, 3) from straight above the start to straight above the goal.
-        pruned: (M, 3) the route's vertices that straight moves need.
-        trajectory: through :attr:`takeoff_point` and the route.
+        route: from the start to the goal, legs included (see :class:`Route`).
+        pruned: the route's vertices that straight moves need (the zones' all kept).
+        trajectory: through :attr:`takeoff_point` and the route; its ``legs`` are the
+            zones flown straight (see :meth:`region_at`).
         speed: cruise speed, m/s.
     """
 
@@ -77,10 +122,25 @@ class FlightPlan:
     result: PlanResult
     fence: Geofence
     frame: TakeoffFrame
-    route: FloatArray
-    pruned: FloatArray
+    route: Route
+    pruned: Route
     trajectory: Trajectory
     speed: float
+
+    @cached_property
+    def _rooms(self) -> tuple[LegRoom, LegRoom]:
+        """The rooms of the start's leg and of the goal's."""
+        return leg_rooms(self.fence, self.problem)
+
+    @property
+    def start_room(self) -> LegRoom:
+        """Where the start's zone may go."""
+        return self._rooms[0]
+
+    @property
+    def goal_room(self) -> LegRoom:
+        """Where the goal's zone may go."""
+        return self._rooms[1]
 
     @property
     def takeoff_ground(self) -> FloatArray:
@@ -95,57 +155,186 @@ class FlightPlan:
     @property
     def landing_ground(self) -> FloatArray:
         """(3,) where the drone lands: on the floor under the end of the route."""
-        return np.array([*self.route[-1, :2], GROUND_Z])
+        return np.array([*self.route.points[-1, :2], GROUND_Z])
+
+    def region_at(self, tau: float) -> Region:
+        """Where the trajectory may be at time ``tau`` s: the start's room on its first
+        leg, the goal's on its last, else the fence."""
+        begin, end = self.trajectory.main_window
+        if tau < begin:
+            return self.start_room
+        return self.goal_room if tau > end else self.fence
+
+    def reference_pace(self, tau: float) -> float:
+        """The fraction of its own speed at which ``rc`` mode follows the trajectory at
+        ``tau`` s: the lost-link bound's pace where it may be then (:meth:`region_at`),
+        on a leg never slower than a creep (:func:`~quadnav.hardware.lost_link.
+        creeping_pace`)."""
+        region = self.region_at(tau)
+        velocity = self.trajectory.velocity(tau)
+        pace = LostLinkBound(region).pace(self.trajectory.position(tau), velocity)
+        if region is self.fence:
+            return pace
+        return creeping_pace(pace, float(np.linalg.norm(velocity)))
+
+    # --- go moves ----------------------------------------------------------------------
 
     def go_moves(self, height: float, speed: int) -> list[Move]:
         """The ``go`` moves from the takeoff column at ``height`` m above the floor
-        through the pruned route, at ``speed`` cm/s; each is checked against the fence.
+        through the pruned route, at ``speed`` cm/s; each is checked against the fence or,
+        in a zone, the leg's room, and so is the landing under their end. The route's
+        vertices are rounded to whole centimetres of the takeoff frame: to the nearest,
+        unless moves between them would then leave where they must stay, when one of the
+        eight centimetres around each vertex is chosen so that none do.
 
         Raises:
-            MoveError: a move that the SDK or the geofence does not allow.
+            MoveError: a move that the SDK, the fence or a leg's room does not allow.
         """
-        points = np.vstack([to_cm([0.0, 0.0, height]), self.frame.to_body_cm(self.pruned)])
-        return go_moves(points, speed, self._allowed)
+        pruned, fits = self._pruned_cm
+        points = np.vstack([to_cm([0.0, 0.0, height]), pruned])
+        try:
+            moves = go_moves(points, speed, self._allowed, self._rule)
+        except MoveError as error:
+            if fits:
+                raise
+            raise MoveError(f"{error} (whole centimetres in the frame of the drone's "
+                            f"heading, {np.degrees(self.frame.yaw):.3g} degrees, cannot "
+                            "follow the route where it must stay: try a heading along the "
+                            "map's axes)") from None
+        end = self.frame.cm_to_map(points[-1])
+        if not self.goal_room.column_ok([*end[:2], GROUND_Z], end):
+            raise MoveError(f"the landing under the last go move's end {points[-1].tolist()} "
+                            f"cm leaves {self.goal_room.name}")
+        return moves
 
-    def _allowed(self, start: IntArray, end: IntArray) -> bool:
-        """Whether a move between takeoff-frame points (cm) stays in the fence, or in the
-        takeoff column (x = y = 0) for the climb from a low takeoff."""
+    def _segment_region(self, segment: int) -> Region:
+        """Where ``go`` segment ``segment`` may go (segment 0 climbs from the takeoff
+        height to the pruned route's first vertex, segment k + 1 follows its k-th)."""
+        if segment <= self.pruned.head:
+            return self.start_room
+        return self.goal_room if segment > self.pruned.tail else self.fence
+
+    def _move_regions(self, segments: range) -> list[Region]:
+        """Where a straight move in place of ``go`` segments ``segments`` must stay: the
+        fence between the zones, else the room of every zone it touches."""
+        regions = list(dict.fromkeys(self._segment_region(k) for k in segments))
+        return regions if len(regions) == 1 else [r for r in regions if r is not self.fence]
+
+    def _allowed(self, start: IntArray, end: IntArray, segments: range) -> bool:
+        """Whether a move between takeoff-frame points (cm) in place of ``segments`` stays
+        where it must, or in its column under the takeoff (x = y = 0, the floor aside)."""
         a, b = self.frame.cm_to_map(start), self.frame.cm_to_map(end)
         in_takeoff_column = not (np.any(start[:2]) or np.any(end[:2]))
-        return self.fence.segment_ok(a, b) or (in_takeoff_column
-                                               and self.fence.column_ok(a, b))
+        return all(region.segment_ok(a, b) or (in_takeoff_column and region.column_ok(a, b))
+                   for region in self._move_regions(segments))
+
+    def _rule(self, segments: range) -> str:
+        """Where a move in place of ``segments`` must stay, in words."""
+        return " and ".join(region.name for region in self._move_regions(segments))
+
+    @cached_property
+    def _pruned_cm(self) -> tuple[IntArray, bool]:
+        """(M, 3) the pruned route as takeoff-frame points in whole centimetres: of the
+        eight around each vertex, those nearest to the vertices in sum (a shortest path
+        over them) such that each lies where the moves on either side of it must stay
+        (the last one above a landing column that does) and so does each straight move
+        between them, and True; the nearest ones and False when there are none such."""
+        body = 100.0 * self.frame.to_body(self.pruned.points)
+        around = np.floor(body)[:, None, :] + _ROUNDINGS  # (M, 8, 3)
+        order = np.argsort(np.linalg.norm(around - np.rint(body)[:, None, :], axis=2),
+                           axis=1, kind="stable")  # the nearest rounding first
+        around = np.take_along_axis(around, order[:, :, None], axis=1).astype(np.int64)
+        cost = np.where([[self._vertex_ok(k, c) for c in row] for k, row in enumerate(around)],
+                        np.linalg.norm(around - body[:, None, :], axis=2), np.inf)
+        total, back = cost[0], []
+        for k in range(1, len(body)):
+            step = np.array([[total[i] + cost[k, j] if np.isfinite(total[i] + cost[k, j])
+                              and self._allowed(around[k - 1, i], around[k, j], range(k, k + 1))
+                              else np.inf for i in range(len(_ROUNDINGS))]
+                             for j in range(len(_ROUNDINGS))])
+            back.append(np.argmin(step, axis=1))
+            total = step.min(axis=1)
+        if not np.isfinite(total.min()):
+            return np.rint(body).astype(np.int64), False
+        chosen = [int(np.argmin(total))]
+        for previous in reversed(back):
+            chosen.append(int(previous[chosen[-1]]))
+        return around[np.arange(len(body)), chosen[::-1]], True
+
+    def _vertex_ok(self, k: int, point: IntArray) -> bool:
+        """Whether takeoff-frame ``point`` (cm) may stand for pruned vertex ``k``: it lies
+        where the ``go`` segments on either side of it must stay (and, for the last, above
+        a landing column that does)."""
+        where = self.frame.cm_to_map(point)
+        last = len(self.pruned.points) - 1
+        regions = {self._segment_region(k), self._segment_region(min(k + 1, last))}
+        return all(region.point_ok(where) for region in regions) and (
+            k < last or self.goal_room.column_ok([*where[:2], GROUND_Z], where))
+
+    # --- the trajectory ------------------------------------------------------------------
+
+    def _track_times(self) -> FloatArray:
+        """Times (N,), s, at most :data:`CHECK_SPACING` m of flight apart, with the ends of
+        the trajectory's straight legs among them."""
+        duration = self.trajectory.duration
+        count = max(2, int(np.ceil(duration * self.speed / CHECK_SPACING)))
+        return np.union1d(np.linspace(0.0, duration, count), self.trajectory.main_window)
 
     def planned_track(self) -> FloatArray:
         """(N, 3) the trajectory sampled at most :data:`CHECK_SPACING` m apart."""
-        count = max(2, int(np.ceil(self.trajectory.duration * self.speed / CHECK_SPACING)))
-        return self.trajectory.position(np.linspace(0.0, self.trajectory.duration, count))
+        return self.trajectory.position(self._track_times())
 
     def planned_points(self, mode: str) -> FloatArray:
         """(N, 3) what is to be flown, takeoff to landing: through the pruned route
         (``waypoints`` mode) or along the trajectory (``rc``)."""
-        middle = self.pruned if mode == "waypoints" else self.planned_track()
+        middle = self.pruned.points if mode == "waypoints" else self.planned_track()
         return np.vstack([self.takeoff_ground, self.takeoff_point, middle,
                           self.landing_ground])
 
+    # --- checks --------------------------------------------------------------------------
+
     def check(self) -> None:
-        """Check the takeoff, the route, the landing and the trajectory against the fence.
+        """Check the takeoff, the route, the landing and the trajectory against the fence
+        and, in the zones, the legs' rooms.
 
         Raises:
-            GeofenceError: the first part that leaves the fence.
+            GeofenceError: the first part that leaves where it must stay.
         """
-        _check_route(self.fence, self.frame, self.route)
-        self.fence.check_track(self.pruned, "the pruned route")
-        self.fence.check_track(self.planned_track(), "the trajectory")
+        check_route(self.fence, self._rooms, self.frame, self.route, self.pruned)
+        t = self._track_times()
+        track = self.trajectory.position(t)
+        begin, end = self.trajectory.main_window
+        for region, inside in ((self.start_room, t <= begin),
+                               (self.fence, (t >= begin) & (t <= end)),
+                               (self.goal_room, t >= end)):
+            region.check_track(track[inside], _in_zone("the trajectory", region))
 
 
-def _check_route(fence: Geofence, frame: TakeoffFrame, route: FloatArray) -> None:
+def leg_rooms(fence: Geofence, problem: PlanningProblem) -> tuple[LegRoom, LegRoom]:
+    """The rooms of the start's leg and of the goal's within ``fence``."""
+    return (LegRoom(fence, problem.start_leg, "start"),
+            LegRoom(fence, problem.goal_leg[::-1], "goal"))
+
+
+def check_route(fence: Geofence, rooms: tuple[LegRoom, LegRoom], frame: TakeoffFrame,
+                route: Route, pruned: Route) -> None:
     """Check the takeoff from under the start, the climb or descent to the route, the
-    route and the landing under its end against ``fence`` (GeofenceError if not)."""
-    takeoff = frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT])
-    fence.check_column(frame.origin, takeoff, "the takeoff")
-    fence.check_track([takeoff, route[0]], "the climb to the route")
-    fence.check_track(route, "the route")
-    fence.check_column([*route[-1, :2], GROUND_Z], route[-1], "the landing")
+    route, the ``pruned`` route and the landing under the route's end (GeofenceError if
+    one leaves the fence or, in a zone, its leg's room)."""
+    start_room, goal_room = rooms
+    takeoff, points = frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT]), route.points
+    start_room.check_column(frame.origin, takeoff, "the takeoff")
+    start_room.check_column(takeoff, [*takeoff[:2], points[0, 2]], "the climb to the route")
+    for what, path in (("the route", route), ("the pruned route", pruned)):
+        for region, part in zip((start_room, fence, goal_room), path.parts(), strict=True):
+            region.check_track(part, _in_zone(what, region))
+    goal_room.check_column([*points[-1, :2], GROUND_Z], points[-1], "the landing")
+
+
+def _in_zone(what: str, region: Region) -> str:
+    """``what`` ("the route"), or its part in a leg's room ("the start leg of the
+    route")."""
+    return f"the {region.label} leg of {what}" if isinstance(region, LegRoom) else what
 
 
 def prune(points: ArrayLike, world: World) -> FloatArray:
@@ -161,17 +350,72 @@ def prune(points: ArrayLike, world: World) -> FloatArray:
     return pts[kept]
 
 
-def _route(path: FloatArray, fence: Geofence) -> FloatArray:
-    """The path's vertices from its first to its last inside the fence, from straight
-    above the start to straight above the goal (consecutive repeats dropped)."""
-    inside = np.flatnonzero(fence.contains(path))
-    if len(inside) == 0:
-        raise QuadnavError("the path never enters the geofence: nothing to fly")
-    air = path[inside[0]:inside[-1] + 1]
-    above_start = [*path[0, :2], air[0, 2]]
-    above_goal = [*path[-1, :2], air[-1, 2]]
-    route = np.vstack([above_start, air, above_goal])
-    return route[np.concatenate([[True], np.any(np.diff(route, axis=0) != 0, axis=1)])]
+def _distinct(points: ArrayLike) -> FloatArray:
+    """``points`` (N, 3) with consecutive repeats dropped."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return pts[np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])]
+
+
+def _joined(start_zone: FloatArray, middle: FloatArray, goal_zone: FloatArray) -> Route:
+    """The route through ``start_zone`` (ending where ``middle`` begins), ``middle`` and
+    ``goal_zone`` (beginning where ``middle`` ends), each (K, 3)."""
+    head = len(start_zone) - 1
+    if len(middle) == 1:  # the search started where it ended
+        return Route(np.vstack([start_zone, goal_zone[1:]]), head, head)
+    points = np.vstack([start_zone, middle[1:-1], goal_zone])
+    return Route(points, head, head + len(middle) - 1)
+
+
+def _raised(leg: FloatArray, floor: float) -> FloatArray:
+    """The start ``leg`` (K, 3) with its vertices before the first one above ``floor``
+    (the fence's floor, m) raised to that one's height: the part of a leg in the floor's
+    margin, flown at the height where the leg leaves it."""
+    first = int(np.flatnonzero(leg[:, 2] > floor)[0])
+    raised = leg.copy()
+    raised[:first, 2] = leg[first, 2]
+    return _distinct(raised)
+
+
+def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence) -> tuple[Route, Route]:
+    """The route of the planner's ``path`` (N, 3), and the route pruned (see the
+    module's description): the legs' parts in the floor's margin raised to where they
+    leave it, below which the takeoff and landing columns take over."""
+    floor = fence.free_world.lower[2]
+    start_zone = _raised(problem.start_leg, floor)
+    goal_zone = _raised(problem.goal_leg[::-1], floor)[::-1]
+    middle = _distinct(problem.search_part(path))
+    return (_joined(start_zone, middle, goal_zone),
+            _joined(start_zone, prune(middle, problem.free_world), goal_zone))
+
+
+def _trajectory(takeoff: FloatArray, route: Route, settings: TrajectorySettings,
+                space: SafeSpace) -> Trajectory:
+    """The trajectory from ``takeoff`` (3,) through ``route``: each zone (the start's
+    from ``takeoff``) straight from rest to rest at :data:`~quadnav.trajectory.generate.
+    LEG_SLOW_DOWN` of the limits, as the generator flies legs, unless it lies in the free
+    space of ``space``'s margin; between them, the generator's trajectory in ``space``."""
+    start_zone, middle, goal_zone = route.parts()
+    start_zone = _distinct([takeoff, *start_zone])
+    straight = settings.replace(corridor=False, optimize_times=False,
+                                v_max=LEG_SLOW_DOWN * settings.v_max,
+                                a_max=LEG_SLOW_DOWN * settings.a_max)
+
+    def flown_straight(zone: FloatArray) -> list[Trajectory] | None:
+        """The zone's straight pieces, or None when it lies in the free space."""
+        if space.inflated.segments_free(np.stack([zone[:-1], zone[1:]], axis=1)).all():
+            return None
+        return [make_trajectory(pair, straight) for pair in itertools.pairwise(zone)]
+
+    first, last = flown_straight(start_zone), flown_straight(goal_zone)
+    points = _distinct(np.vstack([start_zone if first is None else start_zone[-1:],
+                                  middle[1:-1],
+                                  goal_zone if last is None else goal_zone[:1]]))
+    main = [make_trajectory(points, settings, space)] if len(points) > 1 else []
+    first, last = first or [], last or []
+    pieces = first + main + last
+    joined = concatenate(pieces, settings.method, main[0].info if main else {})
+    return joined.replace(yaw_mode=settings.yaw, legs=(sum(p.duration for p in first),
+                                                       sum(p.duration for p in last)))
 
 
 def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
@@ -194,10 +438,10 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
 
     Raises:
         QuadnavError: a bad query; NoPathError: no path; GeofenceError: a part of the
-            flight that leaves the fence.
+            flight that leaves the fence (or, in a zone, the leg's room).
     """
     trajectory = trajectory or TrajectorySettings()
-    with warnings.catch_warnings():  # the legs out of the margin become takeoff and landing
+    with warnings.catch_warnings():  # the legs are flown as legs: no need to warn
         warnings.simplefilter("ignore", PlanningWarning)
         problem = make_problem(world, start, goal, margin + TRACKING_ALLOWANCE)
     result = plan(problem, planning, planner, progress)
@@ -205,12 +449,13 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         raise NoPathError(f"{world.name}: no path found: {result.message}")
     result = refine(problem, result)
     fence = Geofence(world, margin)
-    route = _route(result.path, fence)
+    route, pruned = _route(problem, result.path, fence)
     frame = TakeoffFrame.under(problem.start, yaw)
-    _check_route(fence, frame, route)
-    waypoints = np.vstack([frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT]), route])
-    reference = make_trajectory(waypoints, trajectory, SafeSpace(world, problem.margin))
-    flight = FlightPlan(problem, result, fence, frame, route,
-                        prune(route, problem.free_world), reference, trajectory.v_max)
+    # Checked before the trajectory is made: the first refusal is the clearest.
+    check_route(fence, leg_rooms(fence, problem), frame, route, pruned)
+    reference = _trajectory(frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT]), route, trajectory,
+                            SafeSpace(world, problem.margin))
+    flight = FlightPlan(problem, result, fence, frame, route, pruned, reference,
+                        trajectory.v_max)
     flight.check()
     return flight

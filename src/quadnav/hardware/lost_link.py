@@ -12,11 +12,13 @@ segment from the drone's position ``p``
 velocity follows its sticks with a delay, and the braking distance at a gentle
 :data:`BRAKE` deceleration. Every stick command keeps that segment inside the geofence
 (:meth:`LostLinkBound.is_safe`, quadnav's exact segment test), from the dead-reckoned
-position. (The descent that follows is straight down, onto the floor — or onto a block
-the drone is above.) The speed allowed along a direction is :func:`safe_speed` of the
-distance to the fence along it (:meth:`LostLinkBound.reach`): near walls, blocks, the
-floor's or the ceiling's margin only slow sticks are safe — 15 s at 0.01 m/s (one stick
-percent) is already 0.15 m.
+position — on a leg out of (or into) the margin, inside the leg's room
+(:mod:`quadnav.hardware.leg_room`: no closer to a block than the start or goal itself, nor
+to a wall than the leg), where a drone on its leg may be. (The descent that follows is
+straight down, onto the floor — or onto a block the drone is above.) The speed allowed
+along a direction is :func:`safe_speed` of the distance to the fence along it
+(:meth:`LostLinkBound.reach`): near walls, blocks, the floor's or the ceiling's margin
+only slow sticks are safe — 15 s at 0.01 m/s (one stick percent) is already 0.15 m.
 
 The trajectory's own pace is slowed to match (:meth:`LostLinkBound.pace`): the bridge
 follows the same path, more slowly where the fence is near.
@@ -25,6 +27,7 @@ follows the same path, more slowly where the fence is near.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -32,7 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.hardware.frames import FloatArray
-from quadnav.hardware.geofence import Geofence
+from quadnav.hardware.geofence import Region
+from quadnav.hardware.rc import RC_FULL_SPEED, STICK_MAX
 from quadnav.hardware.sdk import AUTO_LAND_AFTER
 from quadnav.trajectory.model import Trajectory
 
@@ -50,6 +54,9 @@ STILL = 1e-4
 REACH_TOLERANCE = 1e-5
 #: ``pace`` below this fraction of the trajectory's own speed counts as a stall.
 STALL_PACE = 1e-3
+#: The slowest a reference on a leg moves on, m/s: one stick percent (the sticks cannot
+#: follow anything slower anyway).
+LEG_CREEP = RC_FULL_SPEED / STICK_MAX
 
 
 def run_length(speed: float) -> float:
@@ -74,9 +81,10 @@ def _unit(vector: FloatArray) -> tuple[FloatArray, float]:
 
 @dataclass(frozen=True, eq=False)
 class LostLinkBound:
-    """The stick bound for one geofence (see the module's description)."""
+    """The stick bound for one geofence, or one leg's room (see the module's description);
+    ``fence`` is where the run must stay."""
 
-    fence: Geofence
+    fence: Region
 
     @cached_property
     def _ray_length(self) -> float:
@@ -125,17 +133,19 @@ class LostLinkBound:
 
     def limit(self, position: ArrayLike, velocity: ArrayLike) -> FloatArray:
         """The velocity (3,) m/s closest to ``velocity`` that this bound allows at
-        ``position`` (3,) m, found axis by axis: the vertical part is limited by the room
+        ``position`` (3,) m, found part by part: the vertical part is limited by the room
         above or below, the horizontal part by the room along it, then the whole by the
         room along its direction (so a small correction towards the floor does not stop
-        the horizontal motion)."""
+        the horizontal motion) — or, when that gets further along ``velocity``, the same
+        with the part along each of the map's axes (so a small correction towards the wall
+        or block that a leg runs along does not stop the motion along it)."""
         p = np.asarray(position, dtype=np.float64)
         v = np.asarray(velocity, dtype=np.float64)
-        vertical, horizontal = v * [0.0, 0.0, 1.0], v * [1.0, 1.0, 0.0]
-        vertical = vertical * self.pace(p, vertical)
-        horizontal = horizontal * self.pace(p, horizontal)
-        both = vertical + horizontal
-        return both * self.pace(p, both)
+        candidates = []
+        for parts in ([[0.0, 0.0, 1.0], [1.0, 1.0, 0.0]], np.eye(3)):
+            limited = sum(v * part * self.pace(p, v * part) for part in np.asarray(parts))
+            candidates.append(limited * self.pace(p, limited))
+        return max(candidates, key=lambda c: float(np.dot(c, v)))
 
 
 @dataclass(frozen=True)
@@ -160,15 +170,29 @@ class SlowedFlight:
         return not math.isfinite(self.duration)
 
 
-def slowed_flight(bound: LostLinkBound, trajectory: Trajectory, rate: float) -> SlowedFlight:
+def creeping_pace(pace: float, speed: float) -> float:
+    """``pace`` (in [0, 1]) of a reference on a leg that moves at ``speed`` m/s, raised so
+    that it moves on at :data:`LEG_CREEP` at least (at its own speed when that is less).
+
+    A leg may end on a wall, or as close to a block as its start: a stick bounded for a
+    lost link can only creep towards such a point (it stops 15.5 cm short, where one stick
+    percent is no longer safe), and the exact pace would stall the reference on its way
+    there. The sticks themselves stay bounded exactly: the drone lags behind and, at the
+    goal, lands short of it rather than come closer than the bound allows."""
+    return 1.0 if speed <= 0 else max(pace, min(1.0, LEG_CREEP / speed))
+
+
+def slowed_flight(pace_at: Callable[[float], float], trajectory: Trajectory,
+                  rate: float) -> SlowedFlight:
     """Follow ``trajectory`` at ``rate`` steps per drone second, each step advancing the
-    trajectory's time by the step times the :meth:`LostLinkBound.pace` at its position
-    and velocity there (as the bridge does in ``rc`` mode)."""
+    trajectory's time by the step times ``pace_at(time)``, the pace there (as the bridge
+    does in ``rc`` mode: :meth:`LostLinkBound.pace` at the trajectory's position and
+    velocity, for the fence or, on a leg, the leg's room)."""
     period, tau, elapsed = 1.0 / rate, 0.0, 0.0
     slowest, where = 1.0, trajectory.position(0.0)
     while tau < trajectory.duration:
         position = trajectory.position(tau)
-        pace = bound.pace(position, trajectory.velocity(tau))
+        pace = pace_at(tau)
         if pace < slowest:
             slowest, where = pace, position
         if pace < STALL_PACE:

@@ -12,8 +12,9 @@ as too short here). :func:`go_moves` therefore
 * otherwise (a short step that cannot be merged, e.g. the last one) makes a
   **detour**: two allowed moves through a point :data:`DETOUR_CM` off the target.
 
-Every move is checked with the caller's ``allowed(start_cm, end_cm)`` predicate (the
-geofence); the moves end exactly on the last waypoint.
+Every move is checked with the caller's ``allowed(start_cm, end_cm, segments)`` predicate
+(the geofence, or on a leg the leg's room), which is told which waypoint segments the move
+stands in for; the moves end exactly on the last waypoint.
 """
 
 from __future__ import annotations
@@ -40,9 +41,17 @@ DETOUR_CM = 45
 #: Detour directions tried in order (takeoff frame): up first, then down, then level.
 _DETOURS = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]])
 
-#: ``allowed(start, end)``: whether the straight move between two takeoff-frame points
-#: in whole centimetres, each (3,), may be flown.
-Allowed = Callable[[IntArray, IntArray], bool]
+#: ``allowed(start, end, segments)``: whether the straight move between two takeoff-frame
+#: points in whole centimetres, each (3,), may be flown in place of the waypoint segments
+#: ``segments`` (segment ``k`` runs from waypoint ``k`` to ``k + 1``).
+Allowed = Callable[[IntArray, IntArray, range], bool]
+#: ``rule(segments)``: what a move in place of ``segments`` must stay in, in words.
+Rule = Callable[[range], str]
+
+
+def _the_fence(segments: range) -> str:
+    """The default :data:`Rule`: the geofence everywhere."""
+    return "the geofence"
 
 
 class MoveError(QuadnavError):
@@ -99,16 +108,19 @@ def _pieces(start: IntArray, end: IntArray) -> list[IntArray]:
             for k in range(1, count + 1)]
 
 
-def _detour(start: IntArray, end: IntArray, allowed: Allowed) -> list[IntArray] | None:
-    """The middle and end points of two allowed moves start -> middle -> end, or None."""
+def _detour(start: IntArray, end: IntArray, allowed: Allowed,
+            segments: range) -> list[IntArray] | None:
+    """The middle and end points of two allowed moves start -> middle -> end in place of
+    ``segments``, or None."""
     for direction in _DETOURS:
         middle = end + DETOUR_CM * direction
-        if allowed(start, middle) and allowed(middle, end):
+        if allowed(start, middle, segments) and allowed(middle, end, segments):
             return [middle, end]
     return None
 
 
-def go_moves(points: ArrayLike, speed: int, allowed: Allowed) -> list[Move]:
+def go_moves(points: ArrayLike, speed: int, allowed: Allowed,
+             rule: Rule = _the_fence) -> list[Move]:
     """Allowed ``go`` moves from ``points[0]`` through the others to ``points[-1]``.
 
     Args:
@@ -116,40 +128,42 @@ def go_moves(points: ArrayLike, speed: int, allowed: Allowed) -> list[Move]:
             drone is. Points too close to the previous one are merged away or reached
             by a detour (see the module's description).
         speed: cm/s, within :data:`SPEED_RANGE`.
-        allowed: the geofence's verdict on a straight move (see :data:`Allowed`).
+        allowed: the verdict on a straight move (see :data:`Allowed`).
+        rule: names what ``allowed`` keeps a move in, for the messages.
 
     Raises:
         MoveError: a step that is not allowed, or a short one that can be neither
             merged nor reached by a detour.
     """
     pts = np.asarray(points, dtype=np.int64).reshape(-1, 3)
-    here = pts[0]
+    here, at = pts[0], 0  # where the drone is, and the waypoint that is
     reached: list[IntArray] = []
     i = 1
     while i < len(pts):
         target = pts[i]
         if np.array_equal(target, here):
-            i += 1
+            at, i = i, i + 1
             continue
         if not is_long_enough(target - here):
-            if i + 1 < len(pts) and allowed(here, pts[i + 1]):
+            if i + 1 < len(pts) and allowed(here, pts[i + 1], range(at, i + 1)):
                 i += 1  # merged: fly straight on to the next waypoint
                 continue
-            detour = _detour(here, target, allowed)
+            detour = _detour(here, target, allowed, range(at, i))
             if detour is None:
                 raise MoveError(f"no allowed go move from {here.tolist()} to "
                                 f"{target.tolist()} cm: the step is within +-{GO_MIN_CM} "
-                                "cm and neither merging nor a detour stays in the fence")
+                                "cm and neither merging nor a detour stays in "
+                                f"{rule(range(at, i))}")
             steps = detour
         else:
             steps = _pieces(here, target)
         for end in steps:
-            if not allowed(here, end):
+            if not allowed(here, end, range(at, i)):
                 raise MoveError(f"go move from {here.tolist()} to {end.tolist()} cm "
-                                "leaves the geofence")
+                                f"leaves {rule(range(at, i))}")
             reached.append(end)
             here = end
-        i += 1
+        at, i = i, i + 1
     return _moves_between([pts[0], *reached], speed)
 
 

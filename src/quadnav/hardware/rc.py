@@ -29,6 +29,8 @@ from quadnav.hardware.frames import FloatArray, IntArray, body_to_map, map_to_bo
 RC_FULL_SPEED = 1.0
 #: Largest stick value.
 STICK_MAX = 100
+#: How many times the sticks are halved, at most, in search of allowed ones.
+_HALVINGS = 6
 
 
 def tracking_velocity(position_ref: ArrayLike, velocity_ref: ArrayLike,
@@ -68,17 +70,17 @@ class StickRounder:
                  ) -> tuple[int, int, int, int]:
         """The sticks (a, b, c, d) of the next ``rc`` command for unrounded ``values``:
         rounded with the error carried over — on as many axes as ``allowed`` (sticks
-        (3,)) lets, the others rounded towards zero instead — else centred."""
+        (3,)) lets, the others rounded towards zero instead — else all rounded towards
+        zero from a half, a quarter, ... of ``values`` (whole percent turn the velocity a
+        little, which near the edge of what is allowed may not be), else centred."""
         values = np.clip(np.asarray(values, dtype=np.float64), -STICK_MAX, STICK_MAX)
         wanted = values + self._owed
         rounded = np.clip(np.rint(wanted), -STICK_MAX, STICK_MAX)
-        sent: IntArray = np.zeros(3, dtype=np.int64)
-        for axes in _subsets_by_size(3):
-            candidate = rounded.copy()
-            candidate[axes] = np.trunc(values[axes])
-            if allowed(candidate.astype(np.int64)):
-                sent = candidate.astype(np.int64)
-                break
+        candidates = [np.where(np.isin(np.arange(3), axes), np.trunc(values), rounded)
+                      for axes in _subsets_by_size(3)]
+        candidates += [np.trunc(values / 2.0**k) for k in range(1, _HALVINGS + 1)]
+        sent: IntArray = next((c.astype(np.int64) for c in candidates
+                               if allowed(c.astype(np.int64))), np.zeros(3, dtype=np.int64))
         self._owed = np.clip(wanted - sent, -1.0, 1.0)
         right, forward, up = (int(v) for v in sent)
         return right, forward, up, 0
