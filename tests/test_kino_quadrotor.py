@@ -308,7 +308,8 @@ def test_a_start_in_the_margin_leaves_it_by_its_leg_as_for_every_planner(shared_
     world = load_world(shared_maps / "meam620" / "test_window.json")  # starts 0.1 m from walls
     with pytest.warns(PlanningWarning, match=r"start \(0.1, -4.9, 0.2\) is inside the 0.32 m"):
         problem = make_problem(world, world.start, world.goal, world.margin + CHORD_TOLERANCE)
-    result = plan_quadrotor(world, world.start, world.goal, SETTINGS, MODEL, world.margin)
+    with pytest.warns(PlanningWarning, match="inside the 0.32 m safety margin"):
+        result = plan_quadrotor(world, world.start, world.goal, SETTINGS, MODEL, world.margin)
     assert result.solved, result.message
     # The leg first: straight out at rest to rest, then the tree keeps the whole margin.
     leg_end = problem.search_start

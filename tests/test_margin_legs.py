@@ -61,8 +61,14 @@ def _fly(world: World, speed: float, seed: int):
 def swapped(tmp_path_factory) -> World:
     path = tmp_path_factory.mktemp("maps") / "lab_maze.json"
     path.write_text(SWAPPED_JSON)
-    with pytest.warns(MapWarning, match=r"lab_maze.json:\d+: blocks\[0\]: min and max swapped"):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         world = load_world(path)
+    assert [str(w.message).split(": ")[1:3] for w in caught] == [
+        ["blocks[0]", "min and max swapped (xmin 3.02 > xmax 2.98); read as the box between them"],
+        ["blocks[1]", "min and max swapped (xmin 1.52 > xmax 1.48, ymin 4 > ymax 1); read as "
+                      "the box between them"]]
+    assert all(w.category is MapWarning for w in caught)
     assert np.allclose(world.blocks, [[2.98, 0, 0, 3.02, 3, 2], [1.48, 1, 0, 1.52, 4, 2]])
     return world.replace(name="swapped")
 
