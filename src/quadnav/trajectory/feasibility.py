@@ -198,14 +198,13 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
     if not (math.isfinite(dt) and dt > 0):
         raise QuadnavError(f"sample interval dt must be a finite number > 0 s, got {dt}")
     limits = limits or Limits()
-    t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
-    motion = [trajectory.derivative(t, order) for order in (1, 2, 3)]
+    t, *motion = _motion(trajectory, dt)
     series = quantities(*motion, limits)
     peaks = {q.field: _peak(series[q.field], t, q.largest) for q in _QUANTITIES}
     violations = []
     for q in _QUANTITIES:
         peak, limit = peaks[q.field], getattr(limits, q.limit)
-        if limit is not None and _breaks(peak.value, limit, q.largest):
+        if _breaks(q, peak.value, limits):
             bound = "exceeds the limit" if q.largest else "is below the least"
             violations.append(f"{q.label} {peak.value * q.shown:.3g}{q.unit} {bound} "
                               f"{limit * q.shown:.3g}{q.unit} at t = {peak.t:.2f} s")
@@ -222,8 +221,18 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
                              violations=tuple(violations))
 
 
-def _breaks(value: float, limit: float, largest: bool) -> bool:
-    return value > limit if largest else value < limit
+def _motion(trajectory: Trajectory, dt: float
+            ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Times (N,) s every ``dt`` s and at every waypoint, and the velocity, acceleration
+    and jerk (N, 3) there."""
+    t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
+    return t, *(trajectory.derivative(t, order) for order in (1, 2, 3))
+
+
+def _breaks(q: _Quantity, worst: float, limits: Limits) -> bool:
+    """Whether ``worst``, the peak of quantity ``q``, is beyond its limit in ``limits``."""
+    limit = getattr(limits, q.limit)
+    return limit is not None and (worst > limit if q.largest else worst < limit)
 
 
 def quantities(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
@@ -251,10 +260,9 @@ def _within(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
             limits: Limits) -> bool:
     """Whether every quantity is within ``limits``."""
     series = quantities(velocity, acceleration, jerk, limits)
-    return not any(
-        getattr(limits, q.limit) is not None and _breaks(
-            float(series[q.field].max() if q.largest else series[q.field].min()),
-            getattr(limits, q.limit), q.largest) for q in _QUANTITIES)
+    return not any(_breaks(q, float(series[q.field].max() if q.largest
+                                    else series[q.field].min()), limits)
+                   for q in _QUANTITIES)
 
 
 def slowest_feasible_scale(trajectory: Trajectory, limits: Limits, dt: float = 0.01,
@@ -262,8 +270,7 @@ def slowest_feasible_scale(trajectory: Trajectory, limits: Limits, dt: float = 0
     """The least factor ``k >= 1`` by which flying ``trajectory`` ``k`` times slower keeps
     every sampled quantity within ``limits`` (to 0.1 %), or None when even ``largest``
     does not (e.g. a thrust floor that slowing down cannot meet)."""
-    t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
-    v, a, j = (trajectory.derivative(t, order) for order in (1, 2, 3))
+    _, v, a, j = _motion(trajectory, dt)
 
     def ok(k: float) -> bool:
         return _within(v / k, a / k**2, j / k**3, limits)
