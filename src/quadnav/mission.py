@@ -30,9 +30,9 @@ from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
+from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
 from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
-from quadnav.world.margins import box_margins, rounded
+from quadnav.world.margins import box_margins
 from quadnav.world.model import World
 
 #: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2.
@@ -183,9 +183,7 @@ def track_margins(t: FloatArray, positions: FloatArray, world: World,
     pieces = np.stack([positions[:-1], positions[1:]], axis=1)
     margins = box_margins(world, np.concatenate([pieces.min(axis=1), pieces.max(axis=1)],
                                                 axis=1))
-    inside = (t[:-1] >= window[0]) & (t[1:] <= window[1])
-    off = rounded(margins[inside].min()) if inside.any() else float("inf")
-    return off, rounded(margins[~inside].min()) if (~inside).any() else None
+    return windowed_margins(t, margins, window)
 
 
 def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:

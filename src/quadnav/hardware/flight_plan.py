@@ -54,10 +54,11 @@ from quadnav.planning import (
     plan,
 )
 from quadnav.planning.refine import refine
+from quadnav.planning.result import distinct
 from quadnav.trajectory.generate import (
-    LEG_SLOW_DOWN,
     TrajectorySettings,
-    concatenate,
+    join_legs,
+    leg_pieces,
     make_trajectory,
 )
 from quadnav.trajectory.model import Trajectory
@@ -350,12 +351,6 @@ def prune(points: ArrayLike, world: World) -> FloatArray:
     return pts[kept]
 
 
-def _distinct(points: ArrayLike) -> FloatArray:
-    """``points`` (N, 3) with consecutive repeats dropped."""
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    return pts[np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])]
-
-
 def _joined(start_zone: FloatArray, middle: FloatArray, goal_zone: FloatArray) -> Route:
     """The route through ``start_zone`` (ending where ``middle`` begins), ``middle`` and
     ``goal_zone`` (beginning where ``middle`` ends), each (K, 3)."""
@@ -373,7 +368,7 @@ def _raised(leg: FloatArray, floor: float) -> FloatArray:
     first = int(np.flatnonzero(leg[:, 2] > floor)[0])
     raised = leg.copy()
     raised[:first, 2] = leg[first, 2]
-    return _distinct(raised)
+    return distinct(raised)
 
 
 def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence) -> tuple[Route, Route]:
@@ -383,7 +378,7 @@ def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence) -> tuple
     floor = fence.free_world.lower[2]
     start_zone = _raised(problem.start_leg, floor)
     goal_zone = _raised(problem.goal_leg[::-1], floor)[::-1]
-    middle = _distinct(problem.search_part(path))
+    middle = distinct(problem.search_part(path))
     return (_joined(start_zone, middle, goal_zone),
             _joined(start_zone, prune(middle, problem.free_world), goal_zone))
 
@@ -395,27 +390,20 @@ def _trajectory(takeoff: FloatArray, route: Route, settings: TrajectorySettings,
     LEG_SLOW_DOWN` of the limits, as the generator flies legs, unless it lies in the free
     space of ``space``'s margin; between them, the generator's trajectory in ``space``."""
     start_zone, middle, goal_zone = route.parts()
-    start_zone = _distinct([takeoff, *start_zone])
-    straight = settings.replace(corridor=False, optimize_times=False,
-                                v_max=LEG_SLOW_DOWN * settings.v_max,
-                                a_max=LEG_SLOW_DOWN * settings.a_max)
+    start_zone = distinct([takeoff, *start_zone])
 
     def flown_straight(zone: FloatArray) -> list[Trajectory] | None:
         """The zone's straight pieces, or None when it lies in the free space."""
         if space.inflated.segments_free(np.stack([zone[:-1], zone[1:]], axis=1)).all():
             return None
-        return [make_trajectory(pair, straight) for pair in itertools.pairwise(zone)]
+        return leg_pieces(zone, settings)
 
     first, last = flown_straight(start_zone), flown_straight(goal_zone)
-    points = _distinct(np.vstack([start_zone if first is None else start_zone[-1:],
+    points = distinct(np.vstack([start_zone if first is None else start_zone[-1:],
                                   middle[1:-1],
                                   goal_zone if last is None else goal_zone[:1]]))
     main = [make_trajectory(points, settings, space)] if len(points) > 1 else []
-    first, last = first or [], last or []
-    pieces = first + main + last
-    joined = concatenate(pieces, settings.method, main[0].info if main else {})
-    return joined.replace(yaw_mode=settings.yaw, legs=(sum(p.duration for p in first),
-                                                       sum(p.duration for p in last)))
+    return join_legs(first or [], main, last or [], settings)
 
 
 def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,

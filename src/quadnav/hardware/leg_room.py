@@ -29,8 +29,7 @@ import numpy as np
 
 from quadnav.hardware.frames import FloatArray
 from quadnav.hardware.geofence import Geofence, Region
-from quadnav.planning.legs import BOUNDARY_SLACK, LEG_CLEARANCE_SLIVER
-from quadnav.world.margins import point_margins
+from quadnav.planning.legs import BOUNDARY_SLACK, own_clearance
 from quadnav.world.model import Hit, World
 
 
@@ -63,11 +62,7 @@ class LegRoom(Region):
     def clearance(self) -> float:
         """Metres kept from every block: the point's own per-axis distance to the blocks
         less the sliver (and a nanometre, for rounding errors), at most the margin."""
-        margin = self.fence.margin
-        if not len(self.world.blocks):
-            return margin
-        own = float(point_margins(self.world, self.leg[0], boundary=False)[0])
-        return min(margin, (1.0 - LEG_CLEARANCE_SLIVER) * own - BOUNDARY_SLACK)
+        return min(self.fence.margin, own_clearance(self.world, self.leg[0]) - BOUNDARY_SLACK)
 
     @cached_property
     def face_room(self) -> FloatArray:

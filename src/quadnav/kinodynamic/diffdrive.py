@@ -42,7 +42,6 @@ from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import World2D, format_rect
 from quadnav.planning.legs import find_leg
 from quadnav.planning.result import path_length
-from quadnav.world.model import World
 
 FloatArray = NDArray[np.float64]
 
@@ -259,11 +258,7 @@ def _leg(body: World2D, margin: float, point: FloatArray, label: str) -> FloatAr
 
     The 2D world is lifted to 3D, each rectangle a box across a slab thicker than the
     margin, so the 3D legs apply; the slab's floor and ceiling are never the way out."""
-    slab = margin + 1.0
-    lifted = World(boundary=[*body.lower, -slab, *body.upper, slab],
-                   blocks=np.column_stack([body.rects[:, :2], np.full(len(body), -2 * slab),
-                                           body.rects[:, 2:], np.full(len(body), 2 * slab)]),
-                   name=body.name)
+    lifted = body.lifted(margin + 1.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         leg = find_leg(lifted, lifted.inflate(margin), np.array([*point, 0.0]), margin, label)

@@ -102,12 +102,16 @@ class World2D:
 
     @cached_property
     def world3d(self) -> World:
-        """The equivalent 3D world: every rectangle, cut to the boundary (only the part
-        inside matters), extruded over ``|z| <= SLAB``."""
+        """The equivalent 3D world: :meth:`lifted` over ``|z| <= SLAB``."""
+        return self.lifted(SLAB)
+
+    def lifted(self, slab: float) -> World:
+        """This world in 3D: every rectangle, cut to the boundary (only the part inside
+        matters), extruded over ``|z| <= slab`` metres, as is the boundary."""
         def lift(boxes: FloatArray) -> FloatArray:
             n = len(boxes)
-            return np.column_stack([boxes[:, :2], np.full(n, -SLAB), boxes[:, 2:],
-                                    np.full(n, SLAB)])
+            return np.column_stack([boxes[:, :2], np.full(n, -slab), boxes[:, 2:],
+                                    np.full(n, slab)])
         rects = np.hstack([np.maximum(self.rects[:, :2], self.lower),
                            np.minimum(self.rects[:, 2:], self.upper)])
         rects = rects[np.all(rects[:, :2] < rects[:, 2:], axis=1)]

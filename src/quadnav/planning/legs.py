@@ -63,8 +63,7 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     it is free already. QuadnavError when no way out is found."""
     if free_world.is_free(point):
         return point[None].copy()
-    own = float(point_margins(world, point, boundary=False)[0]) if len(world.blocks) else np.inf
-    clearance = (1.0 - LEG_CLEARANCE_SLIVER) * min(margin, own)
+    clearance = min((1.0 - LEG_CLEARANCE_SLIVER) * margin, own_clearance(world, point))
     grow = np.repeat([-clearance, clearance], 3)
     legs = world.replace(blocks=world.blocks + grow, boundary=world.boundary
                          + np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3))
@@ -77,6 +76,15 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     leg = _search_around(legs, free_world, point, margin, label)
     deeper = free_world.inflate(0.5 * LEG_END_DEPTH * margin)  # the leg ends deeper still
     return _end_at_margin(deeper if deeper.is_free(leg[-1]) else free_world, leg)
+
+
+def own_clearance(world: World, point: FloatArray) -> float:
+    """How close, per axis, a leg from ``point`` (3,) may come to the blocks of
+    ``world``, metres: the point's own distance to them, less the sliver
+    (:data:`LEG_CLEARANCE_SLIVER`); ``inf`` without blocks."""
+    if not len(world.blocks):
+        return float("inf")
+    return (1.0 - LEG_CLEARANCE_SLIVER) * float(point_margins(world, point, boundary=False)[0])
 
 
 def _projections(free_world: World, point: FloatArray, push: float) -> list[FloatArray]:

@@ -11,7 +11,7 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from quadnav.limits import PLAN_ITERATIONS
 
@@ -25,6 +25,12 @@ def path_length(path: FloatArray) -> float:
     if len(points) < 2:
         return 0.0
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def distinct(points: ArrayLike) -> FloatArray:
+    """``points`` (N, 3) as float64 with consecutive repeats dropped."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return pts[np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])]
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:

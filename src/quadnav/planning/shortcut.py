@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.errors import QuadnavError
-from quadnav.planning.result import path_length
+from quadnav.planning.result import distinct, path_length
 from quadnav.world.model import FloatArray, World
 from quadnav.world.placement import format_point
 
@@ -145,8 +145,7 @@ def _random_shortcuts(world: World, points: FloatArray, rng: np.random.Generator
         # p1 are rounded: near a tangency a piece can touch a block, so check them too.
         # (Checked one by one: a batch this small costs more to spread over threads.)
         if world.segment_free(spliced[i0], p0) and world.segment_free(p1, spliced[i0 + 3]):
-            points = spliced[np.concatenate(
-                [[True], np.any(np.diff(spliced, axis=0) != 0, axis=1)])]
+            points = distinct(spliced)
     return points
 
 

@@ -20,6 +20,7 @@ from scipy.interpolate import PPoly
 
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED, Range
+from quadnav.planning.result import distinct
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
@@ -147,25 +148,35 @@ def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = 
             corridors can be used. Without it nothing is checked.
     """
     settings = settings or TrajectorySettings()
-    points = np.array(waypoints, dtype=np.float64).reshape(-1, 3)
-    points = points[np.concatenate([[True], np.any(np.diff(points, axis=0) != 0, axis=1)])]
+    points = distinct(waypoints)
     if len(points) < 2:
         raise QuadnavError(f"a trajectory needs at least 2 distinct waypoints, got {len(points)}")
     if space is None:
         return _piece(points, settings, None).replace(yaw_mode=settings.yaw)
     head, tail = space.split(points)
+    main = [_piece(points[head:tail + 1], settings, space.inflated)] if tail > head else []
+    return join_legs(leg_pieces(points[:head + 1], settings), main,
+                     leg_pieces(points[tail:], settings), settings)
+
+
+def leg_pieces(leg: FloatArray, settings: TrajectorySettings) -> list[Trajectory]:
+    """The trajectories (one per segment of the polyline ``leg`` (K, 3)) that fly a leg
+    out of the margin: each segment straight from rest to rest, at :data:`LEG_SLOW_DOWN`
+    of the limits of ``settings``."""
     straight = settings.replace(corridor=False, optimize_times=False,  # two points: a line
                                 v_max=LEG_SLOW_DOWN * settings.v_max,
                                 a_max=LEG_SLOW_DOWN * settings.a_max)
-    pieces = [_piece(points[i:i + 2], straight, None) for i in range(head)]
-    if tail > head:
-        pieces.append(_piece(points[head:tail + 1], settings, space.inflated))
-    pieces += [_piece(points[i:i + 2], straight, None) for i in range(tail, len(points) - 1)]
-    legs = (sum(p.duration for p in pieces[:head]),
-            sum(p.duration for p in pieces[len(pieces) - (len(points) - 1 - tail):]))
-    main = pieces[head] if tail > head else pieces[0]
-    return concatenate(pieces, settings.method, main.info).replace(yaw_mode=settings.yaw,
-                                                                   legs=legs)
+    return [_piece(leg[i:i + 2], straight, None) for i in range(len(leg) - 1)]
+
+
+def join_legs(first: list[Trajectory], main: list[Trajectory], last: list[Trajectory],
+              settings: TrajectorySettings) -> Trajectory:
+    """One trajectory flying the start leg's pieces ``first`` (each one segment, see
+    :func:`leg_pieces`), then ``main`` (at most one piece), then the goal leg's ``last``,
+    with the main piece's solver facts and the yaw of ``settings``."""
+    pieces = [*first, *main, *last]
+    joined = concatenate(pieces, settings.method, (main or pieces)[0].info)
+    return joined.replace(yaw_mode=settings.yaw, leg_segments=(len(first), len(last)))
 
 
 def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World | None

@@ -68,9 +68,10 @@ class Trajectory:
         yaw_mode: constant yaw, or facing the direction of travel.
         yaw0: the constant yaw (and the yaw when there is no horizontal motion), rad.
         info: solver facts for reports (e.g. snap cost, corridor count), JSON-ready.
-        legs: how long the leg out of the safety margin at the start and the leg into it
-            at the goal take, s (0 without such legs); between them the trajectory keeps
-            the whole margin (see :mod:`quadnav.trajectory.space`).
+        leg_segments: how many of the first and of the last waypoint intervals are the
+            legs out of the safety margin at the start and into it at the goal (0 without
+            such legs); between them the trajectory keeps the whole margin (see
+            :mod:`quadnav.trajectory.space`).
     """
 
     poly: PPoly
@@ -79,7 +80,7 @@ class Trajectory:
     yaw_mode: YawMode = YawMode.CONSTANT
     yaw0: float = 0.0
     info: dict = field(default_factory=dict)
-    legs: tuple[float, float] = (0.0, 0.0)
+    leg_segments: tuple[int, int] = (0, 0)
 
     def __post_init__(self) -> None:
         waypoints = np.array(self.waypoints, dtype=np.float64).reshape(-1, 3)
@@ -106,8 +107,17 @@ class Trajectory:
 
     @property
     def main_window(self) -> tuple[float, float]:
-        """``(begin, end)``, s: the times between the legs, when the whole margin is kept."""
-        return self.legs[0], self.duration - self.legs[1]
+        """``(begin, end)``, s: the times between the legs, when the whole margin is kept
+        (breaks, so exactly the times the legs end and begin)."""
+        first, last = self.leg_segments
+        return float(self.breaks[first]), float(self.breaks[-1 - last])
+
+    @property
+    def legs(self) -> tuple[float, float]:
+        """How long the leg out of the margin at the start and the leg into it at the goal
+        take, s (0 without such legs)."""
+        begin, end = self.main_window
+        return begin, self.duration - end
 
     @property
     def segment_times(self) -> FloatArray:

@@ -26,14 +26,12 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, PPoly
 
 from quadnav.errors import QuadnavError
+from quadnav.planning.legs import BOUNDARY_SLACK
+from quadnav.trajectory.collision import check_samples
 from quadnav.trajectory.model import FloatArray, Trajectory
 from quadnav.world.margins import box_margins, rounded
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
-
-#: Widening of the boundary, metres, within which a leg may run: a point on the boundary
-#: itself counts as inside.
-BOUNDARY_SLACK = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,14 +107,19 @@ def trajectory_margins(trajectory: Trajectory, world: World, spacing: float = 0.
     The stretches measured are the check samples of
     :func:`~quadnav.trajectory.collision.check_samples`, at most ``spacing`` metres apart;
     the bound is below the true margin by about the stretches' bend, under 0.5 mm at the
-    default 5 mm. Values are rounded to the nanometre (:func:`~quadnav.world.margins.
-    rounded`), so a leg from the boundary keeps 0, not a rounding error below it.
+    default 5 mm. Values are rounded as by :func:`windowed_margins`.
     """
-    from quadnav.trajectory.collision import check_samples
-
     t, _ = check_samples(trajectory, spacing)
     margins = box_margins(world, stretch_boxes(trajectory, t))
-    begin, end = trajectory.main_window
-    on_leg = (t[1:] <= begin) | (t[:-1] >= end)
-    off = rounded(margins[~on_leg].min()) if (~on_leg).any() else float("inf")
-    return off, rounded(margins[on_leg].min()) if on_leg.any() else None
+    return windowed_margins(t, margins, trajectory.main_window)
+
+
+def windowed_margins(t: FloatArray, margins: FloatArray, window: tuple[float, float]
+                     ) -> tuple[float, float | None]:
+    """The least of the margins (K - 1,) m of the stretches between times ``t`` (K,) s,
+    ``(of those wholly within window, of the others)``, rounded to the nanometre
+    (:func:`~quadnav.world.margins.rounded`; a leg from the boundary keeps 0, not a
+    rounding error below it); ``inf`` for none within, None for no others."""
+    within = (t[:-1] >= window[0]) & (t[1:] <= window[1])
+    off = rounded(margins[within].min()) if within.any() else float("inf")
+    return off, rounded(margins[~within].min()) if (~within).any() else None
