@@ -32,7 +32,6 @@ from tellotools import (
     planned_room,
 )
 
-from quadnav.cli.launch import Stopped
 from quadnav.cli.tello_fly_command import exit_code
 from quadnav.hardware.bridge import BridgeSettings, RcModeError, Status, fly, rc_pace
 from quadnav.hardware.emulator import Faults, TelloEmulator
@@ -41,6 +40,7 @@ from quadnav.hardware.lost_link import HOLD, LostLinkBound, run_length, safe_spe
 from quadnav.hardware.netns import NetNamespace
 from quadnav.hardware.rc import stick_velocity
 from quadnav.hardware.stop_signals import StopSignals, signal_name
+from quadnav.signals import Stopped
 from quadnav.world import World
 
 # --- the lost-link bound -------------------------------------------------------------------

@@ -30,9 +30,8 @@ from pathlib import Path
 from types import CodeType, FrameType, TracebackType
 
 from quadnav.errors import QuadnavError
+from quadnav.signals import STOP_SIGNALS
 
-#: Ctrl-C and the stop signals :mod:`quadnav.cli.launch` handles like it.
-HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 #: Start of a staging folder's name; the process id and a random suffix follow.
 STAGING_PREFIX = ".quadnav-partial-"
 _STAGING_NAME = re.compile(re.escape(STAGING_PREFIX) + r"([1-9][0-9]*)-[a-z0-9_]{8}")
@@ -54,7 +53,7 @@ class _SignalGate:
         if threading.current_thread() is not threading.main_thread():
             return  # handlers can only be set in the main thread; nothing to hold there
         try:
-            for signum in HELD_SIGNALS:
+            for signum in STOP_SIGNALS:
                 previous = signal.getsignal(signum)
                 if previous not in (signal.SIG_IGN, None):
                     self._previous[signum] = signal.signal(signum, self._handle)

@@ -17,17 +17,7 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import NoReturn
 
-#: Signals handled like Ctrl-C.
-STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
-
-
-class Stopped(KeyboardInterrupt):
-    """A stop signal other than Ctrl-C, raised where the program was; ``signum`` says
-    which."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signal.Signals(signum).name)
-        self.signum = signum
+from quadnav.signals import STOP_SIGNALS, Stopped, signal_of
 
 
 def _raise_stopped(signum: int, frame: FrameType | None) -> None:
@@ -42,15 +32,14 @@ def stop_again(unraisable: sys.UnraisableHookArgs) -> None:
     which runs once the main thread lets go (at the latest after Python's 5 ms switch
     interval), by when the finalizer is done: sent from here, it would be raised in here."""
     if isinstance(unraisable.exc_value, KeyboardInterrupt):
-        signum = getattr(unraisable.exc_value, "signum", signal.SIGINT)
-        _thread.start_new_thread(_thread.interrupt_main, (signum,))
+        _thread.start_new_thread(_thread.interrupt_main, (signal_of(unraisable.exc_value),))
     else:
         sys.__unraisablehook__(unraisable)
 
 
 def interrupted_exit_code(interrupt: KeyboardInterrupt) -> int:
     """The shell's exit code for a run ended by ``interrupt``: 128 + the signal number."""
-    return 128 + getattr(interrupt, "signum", signal.SIGINT)
+    return 128 + signal_of(interrupt)
 
 
 def report_interrupt(interrupt: KeyboardInterrupt) -> int:
@@ -64,7 +53,8 @@ def report_interrupt(interrupt: KeyboardInterrupt) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Install the stop-signal handlers, then run the command line."""
     for signum in STOP_SIGNALS:
-        signal.signal(signum, _raise_stopped)
+        if signum != signal.SIGINT:  # Ctrl-C raises KeyboardInterrupt already
+            signal.signal(signum, _raise_stopped)
     sys.unraisablehook = stop_again
     try:
         from quadnav.cli.main import main as run_command_line
@@ -81,7 +71,7 @@ def console() -> NoReturn:
     kernels and plotting) is skipped, with stop signals blocked so that none arrives
     half way."""
     code = main()
-    signal.pthread_sigmask(signal.SIG_BLOCK, (signal.SIGINT, *STOP_SIGNALS))
+    signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

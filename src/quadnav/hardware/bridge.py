@@ -77,8 +77,9 @@ from quadnav.hardware.lost_link import (
 from quadnav.hardware.moves import MoveError, go_speed
 from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
 from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
-from quadnav.hardware.stop_signals import StopSignals, signal_name, signal_of
+from quadnav.hardware.stop_signals import StopSignals, signal_name
 from quadnav.hardware.tello_log import LOG_NAME, TelloLog, open_log
+from quadnav.signals import signal_of
 from quadnav.world.placement import format_point
 
 #: Flight modes.

@@ -2,7 +2,7 @@
 
 While a :class:`StopSignals` block runs (in the main thread), the first SIGINT, SIGTERM or
 SIGHUP raises where the program is, as it would anyway: KeyboardInterrupt for Ctrl-C,
-:class:`~quadnav.cli.launch.Stopped` (a KeyboardInterrupt carrying ``signum``) for the
+:class:`~quadnav.signals.Stopped` (a KeyboardInterrupt carrying ``signum``) for the
 others, so the bridge stops the drone and lands it. From then on — and from
 :meth:`StopSignals.hold` on, which the bridge calls before it lands — every further stop
 signal is only noted in :attr:`StopSignals.held`: a second Ctrl-C, or a service manager's
@@ -16,21 +16,13 @@ import signal
 import threading
 from types import FrameType, TracebackType
 
-from quadnav.cli.launch import Stopped
-
-#: The signals that stop a flight.
-SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+from quadnav.signals import STOP_SIGNALS, Stopped
 
 
 def signal_name(signum: int) -> str:
     """How a message names the stop signal ``signum``: ``Ctrl-C (SIGINT)``, ``SIGTERM``..."""
     name = signal.Signals(signum).name
     return f"Ctrl-C ({name})" if signum == signal.SIGINT else name
-
-
-def signal_of(interrupt: KeyboardInterrupt) -> int:
-    """The signal number behind ``interrupt`` (SIGINT for a plain KeyboardInterrupt)."""
-    return int(getattr(interrupt, "signum", signal.SIGINT))
 
 
 class StopSignals:
@@ -48,7 +40,8 @@ class StopSignals:
 
     def __enter__(self) -> StopSignals:
         if threading.current_thread() is threading.main_thread():
-            self._previous = {signum: signal.signal(signum, self._handle) for signum in SIGNALS}
+            self._previous = {signum: signal.signal(signum, self._handle)
+                              for signum in STOP_SIGNALS}
         return self
 
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
