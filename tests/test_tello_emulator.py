@@ -268,8 +268,10 @@ def test_curve_stop_busy_and_emergency(emulate):
     assert arc[:, 1].max() == pytest.approx(0.5, abs=0.05)  # through (0.5, 0.5): left
     assert np.allclose(arc[-1], [1.0, 0.0, TAKEOFF_HEIGHT], atol=0.05)
 
+    # Full stick forward until it has moved 15 cm (by the emulated track, not the wall
+    # clock: a busy machine must not let it gather more speed before the stop).
     tello.send_rc_control(0, 100, 0, 0)
-    time.sleep(0.2)
+    assert wait_for(lambda: emulator.track()[1][-1][0] - arc[-1][0] > 0.15)
     tello.send_control_command("stop")  # hover where it is, sticks released
     stopped = emulator.track()[1][-1]
     time.sleep(0.3)
