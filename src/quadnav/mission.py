@@ -121,8 +121,8 @@ class Mission:
 
     def metrics(self) -> dict:
         """JSON-ready summary (see the README's list of ``metrics.json`` keys)."""
-        problem, flight = self.problem, self.flight
-        out = {
+        problem = self.problem
+        return {
             "success": self.success,
             "map": problem.world.name,
             "start": problem.start.tolist(),
@@ -140,23 +140,29 @@ class Mission:
             "planning_time_s": self.timings["planning"],
             "trajectory_time_s": self.timings.get("trajectory"),
             "trajectory_duration_s": self.trajectory.duration if self.trajectory else None,
-        }
-        if flight is None:
-            return out | {"collision": False, "reached_goal": False}
-        return out | self.margins | flight_metrics(flight, problem.world, self.settings.sim)
+        } | self.measured
 
     @cached_property
-    def margins(self) -> dict[str, float | None]:
-        """The margin (per axis, m) kept from the real blocks and the boundary, measured
-        exactly, by the trajectory and by the flight, off the legs and on them (None
-        without legs); empty without a flight."""
+    def measured(self) -> dict:
+        """The flight's part of :meth:`metrics` (:func:`measure_flight`), measured once;
+        without a flight, that it neither collided nor reached the goal."""
         if self.trajectory is None or self.flight is None:
-            return {}
-        world, window = self.problem.world, self.trajectory.main_window
-        off, on = trajectory_margins(self.trajectory, world)
-        flown_off, flown_on = track_margins(self.flight.t, self.flight.position, world, window)
-        return {"trajectory_margin_m": off, "trajectory_leg_margin_m": on,
-                "flight_margin_m": flown_off, "flight_leg_margin_m": flown_on}
+            return {"collision": False, "reached_goal": False}
+        return measure_flight(self.problem.world, self.trajectory, self.flight,
+                              self.settings.sim)
+
+
+def measure_flight(world: World, trajectory: Trajectory, flight: Flight,
+                   settings: SimSettings) -> dict:
+    """The flight's part of :meth:`Mission.metrics`: the margin (per axis, m) kept from the
+    real blocks and the boundary, measured exactly, by the trajectory and by the flight,
+    off the legs and on them (None without legs), and :func:`flight_metrics`."""
+    off, on = trajectory_margins(trajectory, world)
+    flown_off, flown_on = track_margins(flight.t, flight.position, world,
+                                        trajectory.main_window)
+    return {"trajectory_margin_m": off, "trajectory_leg_margin_m": on,
+            "flight_margin_m": flown_off, "flight_leg_margin_m": flown_on,
+            } | flight_metrics(flight, world, settings)
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
