@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -12,6 +13,8 @@ import pytest
 from clitools import QUADNAV, assert_user_error, run, run_here
 
 from quadnav import __version__
+from quadnav.cli.launch import report_stop
+from quadnav.signals import Stopped
 from quadnav.world import read_map
 
 
@@ -176,3 +179,42 @@ def test_a_stop_signal_while_starting_up_is_one_line(signum, code, words):
             continue
         assert process.returncode == code, stderr
         assert stderr.strip().splitlines() == [words], stderr
+
+
+def test_an_import_cut_short_by_a_stop_signal_is_a_stop(capsys):
+    """An extension module whose loading a signal interrupts reports an ImportError
+    caused by the signal's exception: that is a stop, one line, not a traceback."""
+    try:
+        try:
+            raise Stopped(signal.SIGTERM)
+        except Stopped as stop:
+            raise ImportError("initialization failed") from stop
+    except ImportError as error:
+        assert report_stop(error) == 143
+    assert capsys.readouterr().err == "quadnav: stopped by SIGTERM\n"
+    with pytest.raises(ImportError, match="no module"):
+        report_stop(ImportError("no module"))
+
+
+def test_stop_signals_wait_while_numba_holds_its_compiler_lock():
+    """A stop while a compiled kernel loads or compiles would leave llvmlite's objects
+    half built (the process then crashes as Python frees them): it waits for the lock."""
+    script = """
+import os, signal
+from numba.core.compiler_lock import global_compiler_lock
+from quadnav.cli.launch import install_stop_handlers, watch_kernel_loads
+install_stop_handlers()
+watch_kernel_loads()
+try:
+    with global_compiler_lock:
+        os.kill(os.getpid(), signal.SIGINT)
+        sum(range(100_000))
+        print("held", flush=True)
+    sum(range(100_000))
+    print("not delivered")
+except KeyboardInterrupt:
+    print("delivered")
+"""
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                            timeout=60)
+    assert result.stdout.split() == ["held", "delivered"], result

@@ -136,7 +136,8 @@ def test_fly_killed_while_writing_over_an_earlier_run_leaves_one_of_them_whole(
         references, tmp_path):
     old, old_files, new_files, writing = references
     plan = [("start", 0.5, "old")]  # starting up: far from done
-    plan += [("writing", k / 8 * writing, None) for k in range(10)]  # some after it
+    plan += [("writing", 0.0, "old"), ("writing", 0.0, "old")]  # as the writing begins
+    plan += [("writing", k / 8 * writing, None) for k in range(1, 10)]  # some after it
     plan += [("moved", delay, "new") for delay in (0.0, 0.0, 0.01)]
     signals = [(signal.SIGTERM, signal.SIGINT)[k % 2] for k in range(len(plan))]
     with ThreadPoolExecutor(max_workers=2) as pool:  # two at a time, in their own folders

@@ -23,6 +23,21 @@ class Stopped(KeyboardInterrupt):
         self.signum = signum
 
 
+def interrupt_for(signum: int) -> KeyboardInterrupt:
+    """The exception the stop signal ``signum`` raises: KeyboardInterrupt for Ctrl-C,
+    :class:`Stopped` for the others."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else Stopped(signum)
+
+
+def interrupt_behind(error: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or stop signal that ``error`` is, or that caused it: an extension
+    module whose loading is interrupted reports an ``ImportError`` caused by it."""
+    seen: BaseException | None = error
+    while seen is not None and not isinstance(seen, KeyboardInterrupt):
+        seen = seen.__cause__ or seen.__context__
+    return seen
+
+
 def signal_of(interrupt: KeyboardInterrupt) -> int:
     """The signal number behind ``interrupt`` (SIGINT for a plain KeyboardInterrupt)."""
     return int(getattr(interrupt, "signum", signal.SIGINT))

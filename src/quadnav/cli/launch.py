@@ -4,7 +4,8 @@ SIGTERM and SIGHUP are turned into :class:`Stopped` (a KeyboardInterrupt), so ev
 command handles them exactly as it handles Ctrl-C: it stops what it is doing, cleans up
 (a Tello lands, a run folder is left as it was) and exits with 128 + the signal number
 (130 for Ctrl-C, 143 for SIGTERM, 129 for SIGHUP). The command line itself is imported
-only after the handlers are in place, so an interrupt during start-up is one line too.
+only after the handlers are in place, so an interrupt during start-up is one line too. A
+signal that comes while numba loads or compiles a kernel waits until it is done.
 """
 
 from __future__ import annotations
@@ -17,11 +18,58 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import NoReturn
 
-from quadnav.signals import STOP_SIGNALS, Stopped, signal_of
+from quadnav.signals import STOP_SIGNALS, Stopped, interrupt_behind, interrupt_for, signal_of
 
 
-def _raise_stopped(signum: int, frame: FrameType | None) -> None:
-    raise Stopped(signum)
+class _StopHandler:
+    """The handler of every stop signal: it raises the signal's exception (see
+    :func:`~quadnav.signals.interrupt_for`) where the program is, unless it is holding
+    stops (:attr:`holding` above 0). It holds them while numba holds its compiler lock
+    (loading a compiled kernel from its cache, or compiling one): an exception raised half
+    way through that can leave llvmlite's objects half built, and Python's clean-up of
+    them then crashes the process. A stop held so is raised as soon as numba lets go
+    (:meth:`on_lock`). It also holds them for good once the command is done
+    (:func:`console`)."""
+
+    def __init__(self) -> None:
+        self.holding = 0  # one for each reason; numba's lock is re-entrant
+        self.held: int | None = None
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.holding:
+            self.held = self.held or signum
+        else:
+            raise interrupt_for(signum)
+
+    def on_lock(self, taken: bool) -> None:
+        """numba took (``taken``) or let go of its compiler lock."""
+        self.holding += 1 if taken else -1
+        if not self.holding and self.held is not None:
+            signum, self.held = self.held, None
+            raise interrupt_for(signum)
+
+
+_stop_handler = _StopHandler()
+
+
+def install_stop_handlers() -> None:
+    """Handle every stop signal with :data:`_stop_handler`."""
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, _stop_handler)
+
+
+def watch_kernel_loads() -> None:
+    """Tell :data:`_stop_handler` when numba takes and lets go of its compiler lock."""
+    from numba.core import event
+
+    class LockWatcher(event.Listener):
+        def on_start(self, started: event.Event) -> None:
+            _stop_handler.on_lock(True)
+
+        def on_end(self, ended: event.Event) -> None:
+            _stop_handler.on_lock(False)
+
+    event.register("numba:compiler_lock", LockWatcher())
 
 
 def stop_again(unraisable: sys.UnraisableHookArgs) -> None:
@@ -42,6 +90,15 @@ def interrupted_exit_code(interrupt: KeyboardInterrupt) -> int:
     return 128 + signal_of(interrupt)
 
 
+def report_stop(error: KeyboardInterrupt | ImportError) -> int:
+    """Say on one line that the run was stopped, and return the exit code, when ``error``
+    is a Ctrl-C or stop signal or an import it interrupted; otherwise raise it again."""
+    interrupt = interrupt_behind(error)
+    if interrupt is None:
+        raise error
+    return report_interrupt(interrupt)
+
+
 def report_interrupt(interrupt: KeyboardInterrupt) -> int:
     """Say on one line that the run was stopped; returns the exit code."""
     what = (f"stopped by {signal.Signals(interrupt.signum).name}"
@@ -52,14 +109,13 @@ def report_interrupt(interrupt: KeyboardInterrupt) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Install the stop-signal handlers, then run the command line."""
-    for signum in STOP_SIGNALS:
-        if signum != signal.SIGINT:  # Ctrl-C raises KeyboardInterrupt already
-            signal.signal(signum, _raise_stopped)
+    install_stop_handlers()
     sys.unraisablehook = stop_again
     try:
+        watch_kernel_loads()
         from quadnav.cli.main import main as run_command_line
-    except KeyboardInterrupt as interrupt:
-        return report_interrupt(interrupt)
+    except (KeyboardInterrupt, ImportError) as error:
+        return report_stop(error)
     return run_command_line(argv)
 
 
@@ -68,10 +124,15 @@ def console() -> NoReturn:
 
     Everything the command writes is closed by then; the output streams are flushed, and
     the interpreter's own clean-up (a third of a second of finalizers for the compiled
-    kernels and plotting) is skipped, with stop signals blocked so that none arrives
-    half way."""
-    code = main()
-    signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    kernels and plotting) is skipped, with stop signals held from the moment the
+    command returns, so that none arrives half way."""
+    # Each increment comes before any call, where Python could raise a stop.
+    try:
+        code = main()
+        _stop_handler.holding += 1
+    except KeyboardInterrupt as interrupt:
+        _stop_handler.holding += 1
+        code = report_interrupt(interrupt)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

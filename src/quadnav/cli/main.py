@@ -18,7 +18,7 @@ from quadnav.cli.animate_command import add_animate_command
 from quadnav.cli.blender_command import add_blender_command
 from quadnav.cli.fly_command import add_fly_command
 from quadnav.cli.kino_command import add_kino_command
-from quadnav.cli.launch import report_interrupt
+from quadnav.cli.launch import report_stop
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.report_command import add_report_command
@@ -66,15 +66,15 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code (also used by the console script)."""
-    args = build_parser().parse_args(argv)
     warnings.showwarning = _one_line_warning
-    try:
+    try:  # a stop while the parser is built or reads the flags is a stop too
+        args = build_parser().parse_args(argv)
         return args.handler(args)
     except QuadnavError as error:
         print(f"quadnav: error: {error}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt as interrupt:
-        return report_interrupt(interrupt)
+    except (KeyboardInterrupt, ImportError) as error:  # a stop during a lazy import too
+        return report_stop(error)
 
 
 if __name__ == "__main__":

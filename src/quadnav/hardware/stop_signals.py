@@ -16,7 +16,7 @@ import signal
 import threading
 from types import FrameType, TracebackType
 
-from quadnav.signals import STOP_SIGNALS, Stopped
+from quadnav.signals import STOP_SIGNALS, interrupt_for
 
 
 def signal_name(signum: int) -> str:
@@ -64,6 +64,4 @@ class StopSignals:
             self.held.append(signum)
             return
         self._holding = True
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise Stopped(signum)
+        raise interrupt_for(signum)
