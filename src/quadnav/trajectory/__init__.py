@@ -6,7 +6,7 @@
 * :class:`Trajectory` — a piecewise polynomial per axis with a yaw reference.
 * Generators ``(waypoints (N, 3), segment times (N - 1,)) -> Trajectory``:
   :func:`minimum_snap`, :func:`minimum_snap_qp`, :func:`quintic_segments`,
-  :func:`quintic_c2`, :func:`cubic_spline`.
+  :func:`quintic_c2`, :func:`quintic_average`, :func:`cubic_spline`.
 * :func:`feasibility` — peaks against a vehicle's :class:`Limits`.
 """
 
@@ -14,17 +14,19 @@ from quadnav.trajectory.cubic import cubic_spline
 from quadnav.trajectory.feasibility import FeasibilityReport, Limits, feasibility
 from quadnav.trajectory.generate import (
     METHODS,
+    TIMINGS,
     TrajectorySettings,
     make_trajectory,
 )
 from quadnav.trajectory.minsnap import minimum_snap, snap_cost
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import Samples, Trajectory, YawMode, ppoly_from_ascending
-from quadnav.trajectory.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.quintic import quintic_average, quintic_c2, quintic_segments
 from quadnav.trajectory.space import SafeSpace, trajectory_margins
 
 __all__ = [
     "METHODS",
+    "TIMINGS",
     "FeasibilityReport",
     "Limits",
     "SafeSpace",
@@ -38,6 +40,7 @@ __all__ = [
     "minimum_snap",
     "minimum_snap_qp",
     "ppoly_from_ascending",
+    "quintic_average",
     "quintic_c2",
     "quintic_segments",
     "snap_cost",

@@ -27,11 +27,13 @@ from quadnav.trajectory.cubic import cubic_spline
 from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
-from quadnav.trajectory.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.quintic import quintic_average, quintic_c2, quintic_segments
+from quadnav.trajectory.retime import fastest_times, knots, stretch_where_fast
 from quadnav.trajectory.space import SafeSpace
 from quadnav.trajectory.timing import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
+    average_times,
     optimize_times,
     trapezoidal_times,
 )
@@ -40,7 +42,11 @@ from quadnav.world.model import World
 #: ``generator(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
 Generator = Callable[[FloatArray, FloatArray], Trajectory]
 #: Methods by name, in the order the command line lists them.
-METHODS = ("minsnap", "quintic", "quintic-c2", "cubic")
+METHODS = ("minsnap", "quintic", "quintic-c2", "cubic", "quintic-average")
+#: Timings by name: near time-optimal along the curve (:mod:`quadnav.trajectory.retime`),
+#: each segment a rest-to-rest trapezoid then all stretched alike, or minimum snap plus
+#: a weight times the total time (``minsnap`` only). ``quintic-average`` has its own.
+TIMINGS = ("fastest", "rest-to-rest", "snap-time")
 #: Legs out of the margin fly at this fraction of the speed and acceleration limits: they
 #: pass close to obstacles, and a short move at full acceleration turns the body fast.
 LEG_SLOW_DOWN = 0.5
@@ -63,16 +69,16 @@ class TrajectorySettings:
 
     Attributes:
         method: one of :data:`METHODS`.
-        v_max: largest speed, m/s (:data:`~quadnav.limits.SPEED`): segment times come from
-            a trapezoidal profile with it, then all stretch alike until the trajectory's
-            peak speed is within it.
-        a_max: largest acceleration, m/s^2 (:data:`~quadnav.limits.ACCELERATION`), used
-            the same way.
+        v_max: top speed, m/s (:data:`~quadnav.limits.SPEED`): the speed never exceeds
+            it, and the ``fastest`` timing cruises at it wherever turns allow.
+        a_max: largest size of the acceleration vector, m/s^2
+            (:data:`~quadnav.limits.ACCELERATION`), for speeding up, braking and turning.
+        timing: one of :data:`TIMINGS` (ignored by ``quintic-average``, whose segment
+            times are length / ``v_max``, then stretched alike into the limits).
         corridor: minimum snap as a QP kept inside safe corridors around the path
             (``minsnap`` only).
-        optimize_times: re-allocate segment times to minimise snap cost plus
-            ``time_weight`` times the total time (``minsnap`` only).
-        time_weight: weight of the total time against the snap cost, m^2/s^8.
+        time_weight: weight of the total time against the snap cost, m^2/s^8
+            (``snap-time`` timing).
         yaw: constant yaw, or facing the direction of travel.
         spacing: largest distance between positions checked for collisions, m.
         max_rounds: rounds of adding waypoints before giving up on a collision.
@@ -81,8 +87,8 @@ class TrajectorySettings:
     method: str = "minsnap"
     v_max: float = DEFAULT_V_MAX
     a_max: float = DEFAULT_A_MAX
+    timing: str = "fastest"
     corridor: bool = False
-    optimize_times: bool = False
     time_weight: float = 10.0
     yaw: YawMode = YawMode.CONSTANT
     spacing: float = 0.02
@@ -96,8 +102,10 @@ class TrajectorySettings:
         checks = [
             (self.method in METHODS,
              f"unknown trajectory method {self.method!r}; expected one of {', '.join(METHODS)}"),
-            (not (self.corridor or self.optimize_times) or self.method == "minsnap",
-             f"corridors and time optimisation need method minsnap, not {self.method!r}"),
+            (self.timing in TIMINGS,
+             f"unknown timing {self.timing!r}; expected one of {', '.join(TIMINGS)}"),
+            (not (self.corridor or self.timing == "snap-time") or self.method == "minsnap",
+             f"corridors and the snap-time timing need method minsnap, not {self.method!r}"),
             (math.isfinite(self.time_weight) and self.time_weight > 0,
              f"time weight must be > 0, got {self.time_weight}"),
         ]
@@ -115,6 +123,8 @@ def _generator(settings: TrajectorySettings, free_world: World | None) -> Genera
         return lambda w, t: quintic_segments(w, t, settings.v_max)
     if settings.method == "quintic-c2":
         return quintic_c2
+    if settings.method == "quintic-average":
+        return quintic_average
     if settings.method == "cubic":
         return cubic_spline
     if not settings.corridor:
@@ -163,7 +173,7 @@ def leg_pieces(leg: FloatArray, settings: TrajectorySettings) -> list[Trajectory
     """The trajectories (one per segment of the polyline ``leg`` (K, 3)) that fly a leg
     out of the margin: each segment straight from rest to rest, at :data:`LEG_SLOW_DOWN`
     of the limits of ``settings``."""
-    straight = settings.replace(corridor=False, optimize_times=False,  # two points: a line
+    straight = settings.replace(corridor=False, timing="rest-to-rest",  # two points: a line
                                 v_max=LEG_SLOW_DOWN * settings.v_max,
                                 a_max=LEG_SLOW_DOWN * settings.a_max)
     return [_piece(leg[i:i + 2], straight, None) for i in range(len(leg) - 1)]
@@ -183,13 +193,22 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
            ) -> Trajectory:
     """One trajectory from rest to rest through ``points`` (N, 3), kept in the free space
     of ``free_world`` when given, within the limits of ``settings``."""
+    v, a = settings.v_max, settings.a_max
+    fastest = settings.timing == "fastest" and settings.method != "quintic-average"
+    if fastest:
+        points = knots(points, v, a)
     if settings.corridor and free_world is not None:
         points, _ = safe_corridors(free_world, points)
-    times = trapezoidal_times(points, settings.v_max, settings.a_max)
-    if settings.optimize_times:
+    build = _generator(settings, free_world)
+    if settings.method == "quintic-average":
+        times = average_times(points, v)
+    else:
+        times = trapezoidal_times(points, v, a)
+    if fastest:
+        times = fastest_times(points, times, build, v, a)
+    elif settings.timing == "snap-time":
         times = optimize_times(times, lambda t: minimum_snap(points, t).info["cost"],
                                settings.time_weight)
-    build = _generator(settings, free_world)
 
     def fly(waypoints: FloatArray, segment_times: FloatArray) -> Trajectory:
         if free_world is None:
@@ -198,7 +217,9 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
                                  max_rounds=settings.max_rounds, spacing=settings.spacing)
 
     trajectory = fly(points, times)
-    stretch = slow_down_factor(trajectory, settings.v_max, settings.a_max)
+    if fastest:
+        return stretch_where_fast(trajectory, fly, v, a)
+    stretch = slow_down_factor(trajectory, v, a)
     if stretch > 1.0:
         trajectory = fly(trajectory.waypoints, stretch * trajectory.segment_times)
     return trajectory.replace(info={**trajectory.info, "time_stretch": stretch})

@@ -3,6 +3,9 @@ both ends (quintic Hermite interpolation).
 
 * :func:`quintic_segments` — the course reports' method: at rest at the first and last
   waypoint; at interior waypoints a velocity along the path and zero acceleration (C1).
+* :func:`quintic_average` — another report's method: at each interior waypoint the
+  average of the two segments' average velocities (length over time, along the segment),
+  zero acceleration; at rest at both ends.
 * :func:`quintic_c2` — interior velocities and accelerations solved so that jerk and snap
   are continuous too: the minimum-jerk spline (C4), from one block-tridiagonal system.
 
@@ -80,6 +83,30 @@ def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float
     states[:, 0] = points
     states[1:-1, 1] = speeds[:, None] * (directions[:-1] + directions[1:]) / 2
     return _hermite(states, durations, "quintic", {"cruise_speed": float(cruise_speed)})
+
+
+def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
+    """Quintic segments through ``waypoints``, C1, at rest at both ends, with the "average
+    velocity" end conditions: at an interior waypoint the velocity is the mean of the
+    average velocities ``(p_{i+1} - p_i) / T_i`` of the segments arriving and leaving,
+    and the acceleration is zero. With segment times length / v (see
+    :func:`~quadnav.trajectory.timing.average_times`) that is speed v along a straight
+    line and less in turns.
+
+    Args:
+        waypoints: (N, 3) points, metres, N >= 2, no two consecutive ones equal.
+        times: (N - 1,) segment durations, s, each finite and > 0.
+
+    Returns:
+        A :class:`Trajectory`, method ``"quintic-average"``.
+    """
+    points, durations = check_waypoints_and_times(waypoints, times)
+    segment_lengths(points)
+    average = np.diff(points, axis=0) / durations[:, None]
+    states = np.zeros((len(points), 3, 3))
+    states[:, 0] = points
+    states[1:-1, 1] = (average[:-1] + average[1:]) / 2
+    return _hermite(states, durations, "quintic-average", {})
 
 
 def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:

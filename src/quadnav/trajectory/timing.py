@@ -18,12 +18,12 @@ from quadnav.errors import QuadnavError
 from quadnav.trajectory.model import FloatArray
 from quadnav.trajectory.polybasis import check_waypoints_and_times
 
-#: Default speed limit of the time allocation, m/s: a conservative indoor cruise speed for
-#: a Tello-class (80 g) drone, well below what it can fly.
-DEFAULT_V_MAX = 1.0
-#: Default acceleration limit of the time allocation, m/s^2: conservative indoors (a tilt
-#: of about 9 degrees), leaving thrust to reject disturbances.
-DEFAULT_A_MAX = 1.5
+#: Default top speed, m/s, of every trajectory (``fly``, ``traj`` and the library): an
+#: indoor cruise speed for a Tello-class (80 g) drone, within what it can fly.
+DEFAULT_V_MAX = 2.0
+#: Default acceleration limit (size of the vector), m/s^2: a tilt of about 17 degrees,
+#: leaving thrust to reject disturbances.
+DEFAULT_A_MAX = 3.0
 #: Step of the forward-difference gradient in log-time (a relative time change).
 _GRADIENT_STEP = 1e-6
 
@@ -71,6 +71,12 @@ def trapezoidal_times(waypoints: ArrayLike, v_max: float = DEFAULT_V_MAX,
     reaches_cruise = lengths >= v * v / a
     times = np.where(reaches_cruise, lengths / v + v / a, 2.0 * np.sqrt(lengths / a))
     return factor * times
+
+
+def average_times(waypoints: ArrayLike, speed: float) -> FloatArray:
+    """Segment durations (N - 1,), s: each segment's length over ``speed`` m/s (the
+    "average velocity" timing of the course reports), for ``waypoints`` (N, 3), metres."""
+    return segment_lengths(waypoints) / _positive(speed, "speed (m/s)")
 
 
 def optimize_times(times0: ArrayLike, cost: Callable[[FloatArray], float],

@@ -1,0 +1,184 @@
+"""Near time-optimal segment times: cruise at the top speed, slow only where needed.
+
+A smooth trajectory through a few far-apart waypoints brakes towards each of them if each
+segment gets the time of a rest-to-rest move. Here instead (the approach TOPP-RA takes,
+with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
+
+1. :func:`knots` adds waypoints on the path's straight segments, about
+   :data:`KNOT_INTERVAL` seconds of flight apart (closer where the flight speeds up from
+   and slows down to rest), so a polynomial per segment can follow any speed profile.
+   They lie on the path's segments, which are free, so the collision refinement still
+   applies.
+2. :func:`fastest_times` builds the trajectory, finds the fastest speed along its own
+   curve within the limits (:func:`~quadnav.trajectory.speed_profile.fastest_speeds`),
+   and gives each segment the time that speed takes over it; the new times change the
+   curve a little, so this repeats :data:`PROFILE_ROUNDS` times.
+3. :func:`stretch_where_fast` stretches the times of the segments whose speed or
+   acceleration still exceeds a limit (a polynomial rounds off the profile's corners
+   and overshoots a little), and finally all of them alike if a few local rounds were
+   not enough — so the result is always within the limits.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
+
+#: ``build(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
+Build = Callable[[FloatArray, FloatArray], Trajectory]
+#: Flight time between added waypoints, s: long enough for a round curve through a
+#: corner, short enough for the polynomials to follow the speed profile.
+KNOT_INTERVAL = 0.4
+#: Added waypoints closer than this fraction of a cruise interval to a path vertex are
+#: dropped (a very short segment beside a corner only sharpens it).
+VERTEX_CLEARANCE = 0.3
+#: Rounds of "build the curve, time it along its own fastest speed".
+PROFILE_ROUNDS = 3
+#: Fraction of the acceleration limit the speed profile plans with: the polynomials
+#: overshoot the profile's sudden changes of acceleration a little.
+PROFILE_ACCELERATION_SHARE = 0.9
+#: Samples per segment along which the speed profile and the peaks are measured.
+SAMPLES_PER_SEGMENT = 24
+#: Rounds of stretching only the segments that exceed a limit, before stretching all.
+LOCAL_STRETCH_ROUNDS = 8
+#: Extra stretch, relative, beyond what the sampled peaks ask for (peaks between samples).
+STRETCH_ALLOWANCE = 1e-2
+
+
+def rest_to_rest_distance(length: float, v_max: float, a_max: float, t: FloatArray
+                          ) -> FloatArray:
+    """Distance (K,), m, covered at times ``t`` (K,) s by the fastest rest-to-rest move
+    over ``length`` m with speed at most ``v_max`` m/s and acceleration ``a_max`` m/s^2
+    (trapezoidal, or triangular when it never reaches ``v_max``); ``t`` within its
+    duration ``rest_to_rest_duration``."""
+    top = min(v_max, math.sqrt(a_max * length))
+    ramp = top / a_max
+    duration = length / top + ramp
+    return np.where(t < ramp, 0.5 * a_max * t**2,
+                    np.where(t > duration - ramp, length - 0.5 * a_max * (duration - t)**2,
+                             0.5 * a_max * ramp**2 + top * (t - ramp)))
+
+
+def rest_to_rest_duration(length: float, v_max: float, a_max: float) -> float:
+    """Duration, s, of the fastest rest-to-rest move over ``length`` m with speed at most
+    ``v_max`` m/s and acceleration at most ``a_max`` m/s^2: ``L / v + v / a`` when it
+    reaches ``v``, else ``2 sqrt(L / a)``."""
+    top = min(v_max, math.sqrt(a_max * length))
+    return length / top + top / a_max
+
+
+def knots(points: FloatArray, v_max: float, a_max: float,
+          interval: float = KNOT_INTERVAL) -> FloatArray:
+    """The path ``points`` (N, 3) with points added on its segments (M, 3), M >= N.
+
+    They sit where a rest-to-rest move along the whole path (its corners ignored) with
+    ``v_max`` m/s and ``a_max`` m/s^2 would be every ``interval`` s — closer together
+    where it speeds up and slows down — every vertex kept, and none closer than
+    :data:`VERTEX_CLEARANCE` of a cruise interval to a vertex.
+    """
+    cumulative = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0),
+                                                                 axis=1))])
+    length = float(cumulative[-1])
+    duration = rest_to_rest_duration(length, v_max, a_max)
+    count = max(1, math.ceil(duration / interval))
+    added = rest_to_rest_distance(length, v_max, a_max,
+                                  np.linspace(0.0, duration, count + 1)[1:-1])
+    gap = np.abs(added[:, None] - cumulative[None, :]).min(axis=1)
+    added = added[gap > VERTEX_CLEARANCE * v_max * interval]
+    along = np.concatenate([cumulative, added])
+    order = np.argsort(along, kind="stable")
+    is_vertex = order < len(points)
+    segment = np.clip(np.searchsorted(cumulative, along[order], side="right") - 1, 0,
+                      len(points) - 2)
+    fraction = (along[order] - cumulative[segment]) / (cumulative[segment + 1]
+                                                       - cumulative[segment])
+    inserted = points[segment] + fraction[:, None] * (points[segment + 1] - points[segment])
+    return np.where(is_vertex[:, None], points[np.minimum(order, len(points) - 1)], inserted)
+
+
+def _curve_samples(trajectory: Trajectory) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Sample times (K,) s, with every break at index ``SAMPLES_PER_SEGMENT * i``, the
+    arc length there (K,) m and the curvature (K,) 1/m (0 where the trajectory stops)."""
+    breaks = trajectory.breaks
+    local = np.arange(SAMPLES_PER_SEGMENT) / SAMPLES_PER_SEGMENT
+    t = np.append((breaks[:-1, None] + np.diff(breaks)[:, None] * local).ravel(), breaks[-1])
+    positions = trajectory.position(t)
+    velocity = trajectory.velocity(t)
+    speed = np.linalg.norm(velocity, axis=1)
+    turning = np.linalg.norm(np.cross(velocity, trajectory.acceleration(t)), axis=1)
+    moving = speed > 1e-9 * max(float(speed.max()), 1e-300)
+    curvature = np.zeros_like(speed)
+    curvature[moving] = turning[moving] / speed[moving] ** 3
+    steps = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    # A step the curve barely moves along still needs a little length (and time).
+    arc = np.concatenate([[0.0], np.cumsum(np.maximum(steps, 1e-9))])
+    return t, arc, curvature
+
+
+def profile_times(trajectory: Trajectory, v_max: float, a_max: float) -> FloatArray:
+    """Segment times (S,), s: how long the fastest flight along ``trajectory``'s curve,
+    within ``v_max`` m/s and ``a_max`` m/s^2, from rest to rest, takes over each of its
+    segments."""
+    _, arc, curvature = _curve_samples(trajectory)
+    passing = travel_times(arc, fastest_speeds(arc, curvature, v_max, a_max))
+    return np.diff(passing[::SAMPLES_PER_SEGMENT])
+
+
+def fastest_times(points: FloatArray, times: FloatArray, build: Build, v_max: float,
+                  a_max: float) -> FloatArray:
+    """Segment times (N - 1,), s, for ``points`` (N, 3) that fly ``build``'s curve as fast
+    as ``v_max`` m/s and :data:`PROFILE_ACCELERATION_SHARE` of ``a_max`` m/s^2 allow,
+    starting from the guess ``times`` (N - 1,) s (see the module docstring)."""
+    for _ in range(PROFILE_ROUNDS):
+        times = profile_times(build(points, times), v_max,
+                              PROFILE_ACCELERATION_SHARE * a_max)
+    return times
+
+
+def segment_excess(trajectory: Trajectory, v_max: float, a_max: float) -> FloatArray:
+    """Per segment (S,), the factor by which its times must stretch to bring its sampled
+    peak speed within ``v_max`` m/s and acceleration within ``a_max`` m/s^2 (stretching
+    by k divides speeds by k and accelerations by k^2); <= 1 where it is within."""
+    t, _, _ = _curve_samples(trajectory)
+    speed = np.linalg.norm(trajectory.velocity(t), axis=1)
+    acceleration = np.linalg.norm(trajectory.acceleration(t), axis=1)
+    excess = np.maximum(speed / v_max, np.sqrt(acceleration / a_max))
+    per_segment = excess[:-1].reshape(-1, SAMPLES_PER_SEGMENT).max(axis=1)
+    ends = excess[SAMPLES_PER_SEGMENT::SAMPLES_PER_SEGMENT]  # the break ending each segment
+    return np.maximum(per_segment, ends)
+
+
+def stretch_where_fast(trajectory: Trajectory, build: Build, v_max: float, a_max: float
+                       ) -> Trajectory:
+    """``trajectory`` rebuilt with longer times where its speed or acceleration exceeds
+    ``v_max`` m/s or ``a_max`` m/s^2: each offending segment and, half as much, its
+    neighbours, for up to :data:`LOCAL_STRETCH_ROUNDS` rounds, then every segment alike;
+    ``info["time_stretch"]`` is the final duration over the first."""
+    first = trajectory.duration
+    for _ in range(LOCAL_STRETCH_ROUNDS):
+        excess = segment_excess(trajectory, v_max, a_max)
+        if excess.max() <= 1.0:
+            break
+        trajectory = build(trajectory.waypoints,
+                           trajectory.segment_times * _local_stretch(excess))
+    else:
+        excess = segment_excess(trajectory, v_max, a_max)
+        if excess.max() > 1.0:
+            factor = float(excess.max()) * (1.0 + STRETCH_ALLOWANCE)
+            trajectory = build(trajectory.waypoints, trajectory.segment_times * factor)
+    return trajectory.replace(info={**trajectory.info,
+                                    "time_stretch": trajectory.duration / first})
+
+
+def _local_stretch(excess: NDArray[np.float64]) -> FloatArray:
+    """Stretch factors (S,) >= 1 for segments with ``excess`` (S,): the excess (plus
+    :data:`STRETCH_ALLOWANCE`) where above 1, and its square root on the neighbours."""
+    own = np.where(excess > 1.0, excess * (1.0 + STRETCH_ALLOWANCE), 1.0)
+    beside = np.sqrt(np.maximum(np.r_[own[1:], 1.0], np.r_[1.0, own[:-1]]))
+    return np.maximum(own, beside)
