@@ -136,7 +136,7 @@ def test_trapezoidal_times_by_hand():
     np.testing.assert_allclose(times, [3 + 1 / 1.5, 2 * np.sqrt(0.375 / 1.5), 2 / 1.5],
                                rtol=1e-12)
     np.testing.assert_allclose(trapezoidal_times(points, 1.0, 1.5, scale=2.0), 2 * times)
-    assert (DEFAULT_V_MAX, DEFAULT_A_MAX) == (1.0, 1.5)
+    assert (DEFAULT_V_MAX, DEFAULT_A_MAX) == (2.0, 3.0)  # fly, traj and the library alike
     np.testing.assert_allclose(segment_lengths(points), [3, 0.375, 1 / 1.5])
 
 

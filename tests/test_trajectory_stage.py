@@ -64,7 +64,7 @@ def test_optimised_times_trade_snap_for_time():
         return minimum_snap(path, times).info["cost"] + weight * times.sum()
 
     assert objective(optimised) < objective(start)
-    settings = TrajectorySettings(optimize_times=True, time_weight=weight)
+    settings = TrajectorySettings(timing="snap-time", time_weight=weight)
     trajectory = make_trajectory(path, settings)
     t = np.linspace(0, trajectory.duration, 20000)
     assert np.linalg.norm(trajectory.velocity(t), axis=1).max() <= settings.v_max

@@ -9,6 +9,7 @@ check that the vehicle can fly it, and fly it in simulation against the real
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from collections.abc import Callable
@@ -21,27 +22,33 @@ from numpy.typing import ArrayLike
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.errors import PlanningWarning
+from quadnav.limits import ACCELERATION, SPEED
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import path_length
-from quadnav.sim.envelope import check_flyable
+from quadnav.sim.envelope import check_flyable, vehicle_limits
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
+from quadnav.trajectory.feasibility import slowest_feasible_scale
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
+from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
 from quadnav.world.margins import box_margins
 from quadnav.world.model import World
 
-#: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2.
-DEFAULT_SPEED = 2.0
-DEFAULT_ACCELERATION = 3.0
+#: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2: the trajectory
+#: stage's defaults, the same for ``fly``, ``traj`` and the library.
+DEFAULT_SPEED = DEFAULT_V_MAX
+DEFAULT_ACCELERATION = DEFAULT_A_MAX
 #: Search budget of a mission: samples of improvement after the first path, and a
 #: wall-time cap in seconds on the whole search. The first path takes as many samples as
 #: it needs, so the same seed flies the same flight unless the time cap ends the search.
 DEFAULT_IMPROVE = 50_000
+#: Rounds of slowing a ``fastest`` trajectory down until the vehicle can fly it.
+FASTEST_ROUNDS = 3
 DEFAULT_TIME_CAP = 10.0
 
 
@@ -62,6 +69,10 @@ class MissionSettings:
         planning: the planner's budget, seed and tuning.
         refine: shortcut and smooth the path before making the trajectory.
         trajectory: generator and limits (``v_max`` is the top speed).
+        fastest: ignore the trajectory's speed and acceleration limits and fly as fast as
+            the vehicle can follow on the path: its own limits
+            (:func:`~quadnav.sim.envelope.vehicle_limits`), then uniformly slower until
+            every limit holds (``--speed max``).
         vehicle: the simulated quadrotor.
         gains: the controller.
         sim: rates, stopping and success rules, disturbances, seed.
@@ -71,6 +82,7 @@ class MissionSettings:
     planning: PlannerSettings = field(default_factory=_default_planner)
     refine: bool = True
     trajectory: TrajectorySettings = field(default_factory=_default_trajectory)
+    fastest: bool = False
     vehicle: VehicleParams = field(default_factory=load_params)
     gains: Gains = field(default_factory=Gains)
     sim: SimSettings = field(default_factory=SimSettings)
@@ -255,15 +267,35 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     if not result.solved:
         return Mission(problem, result, raw_length, None, None, timings, settings)
     began = time.perf_counter()
-    trajectory = make_trajectory(result.path, settings.trajectory,
-                                 SafeSpace(world, problem.margin))
+    trajectory, chosen = _make_flyable_trajectory(result.path, SafeSpace(world, problem.margin),
+                                                  settings)
+    settings = dataclasses.replace(settings, trajectory=chosen)
     timings["trajectory"] = time.perf_counter() - began
-    check_flyable(trajectory, settings.vehicle, settings.gains, settings.trajectory.v_max,
-                  settings.trajectory.a_max)
+    check_flyable(trajectory, settings.vehicle, settings.gains, chosen.v_max, chosen.a_max)
     flight = simulate(trajectory, settings.vehicle, settings.gains, world, settings.sim,
                       flight_progress)
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
+
+
+def _make_flyable_trajectory(path: FloatArray, space: SafeSpace, settings: MissionSettings
+                             ) -> tuple[Trajectory, TrajectorySettings]:
+    """The trajectory through ``path`` (N, 3) and the settings that made it: those of
+    ``settings``, told the vehicle's limits; with ``settings.fastest`` the vehicle's top
+    speed and acceleration, slowed as a whole until every vehicle limit holds."""
+    vehicle = vehicle_limits(settings.vehicle, settings.gains)
+    chosen = settings.trajectory.replace(vehicle=vehicle)
+    if settings.fastest:
+        chosen = chosen.replace(v_max=min(vehicle.v_max, SPEED.high),
+                                a_max=min(vehicle.a_max, ACCELERATION.high))
+    trajectory = make_trajectory(path, chosen, space)
+    for _ in range(FASTEST_ROUNDS if settings.fastest else 0):
+        scale = slowest_feasible_scale(trajectory, vehicle)
+        if scale is None or scale <= 1.0:
+            break
+        chosen = chosen.replace(v_max=chosen.v_max / scale, a_max=chosen.a_max / scale**2)
+        trajectory = make_trajectory(path, chosen, space)
+    return trajectory, chosen
 
 
 def warn_if_margin_too_small(margin: float, vehicle: VehicleParams) -> None:

@@ -24,6 +24,7 @@ from quadnav.limits import (
 )
 from quadnav.planning import PlannerSettings, planner_names
 from quadnav.runfolder import check_output_folder
+from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -67,9 +68,31 @@ samples = number_in(SAMPLES)
 plan_time = number_in(PLAN_TIME)
 length = number_in(LENGTH)
 speed = number_in(SPEED)
+
+
+def speed_or_max(text: str) -> float | None:
+    """argparse type of ``--speed V|max``: a top speed in :data:`SPEED`, or ``None`` for
+    ``max`` (as fast as the vehicle can follow)."""
+    return None if text.strip().lower() == "max" else speed(text)
+
+
 acceleration = number_in(ACCELERATION)
 heading_degrees = number_in(HEADING_DEGREES)
 time_scale = number_in(TIME_SCALE)
+
+
+def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
+    """--method and --timing: the trajectory's shape and how its segments are timed."""
+    parser.add_argument("--method", choices=METHODS, default="minsnap",
+                        help="shape of the trajectory: minimum snap, the course reports' "
+                             "quintic or cubic, the minimum-jerk quintic-c2, or the quintic "
+                             "with average-velocity ends and times length / speed "
+                             "(default: minsnap)")
+    parser.add_argument("--timing", choices=TIMINGS, default="fastest",
+                        help="segment times: fastest cruises at --speed and slows only for "
+                             "turns and the ends; rest-to-rest gives each segment a "
+                             "stop-and-go move; snap-time trades snap for time (minsnap) "
+                             "(default: fastest)")
 
 
 def output_folder(path: str) -> Path:

@@ -11,12 +11,13 @@ from quadnav.cli.args import (
     add_margin_argument,
     add_planner_arguments,
     add_start_goal_arguments,
+    add_timing_arguments,
     number_in,
     output_folder,
     planner_budget,
     resolve_margin,
     resolve_start_goal,
-    speed,
+    speed_or_max,
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.gains import load_gains
@@ -47,7 +48,9 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
     return MissionSettings(
         planner=args.planner,
         planning=planner_budget(args),
-        trajectory=TrajectorySettings(v_max=args.speed, a_max=args.accel),
+        trajectory=TrajectorySettings(method=args.method, timing=args.timing,
+                                      v_max=args.speed or DEFAULT_SPEED, a_max=args.accel),
+        fastest=args.speed is None,
         vehicle=vehicle,
         gains=load_gains(args.gains, vehicle.gains),
         sim=SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
@@ -93,7 +96,7 @@ def _failure(mission: Mission) -> str:
 def _print_summary(mission: Mission) -> None:
     m = mission.metrics()
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
-          f"{m['seed']}, vehicle {m['vehicle']}, top speed {m['speed_m_s']:g} m/s")
+          f"{m['seed']}, vehicle {m['vehicle']}, top speed {m['speed_m_s']:.3g} m/s")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
         return
@@ -118,7 +121,8 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "fly", help="plan, smooth and fly a simulated quadrotor through a map (the main job)",
         description="The whole pipeline: plan a path with RRT* through MAP, shortcut and "
-                    "smooth it, make a minimum-snap trajectory within the top speed, and fly "
+                    "smooth it, make a trajectory (minimum snap by default) that cruises at "
+                    "the top speed, and fly "
                     "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
@@ -128,12 +132,15 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
-    p.add_argument("--speed", type=speed, default=DEFAULT_SPEED, metavar="V",
-                   help=f"top speed of the trajectory, {SPEED.describe()} "
-                        f"(default: {DEFAULT_SPEED:g})")
+    p.add_argument("--speed", type=speed_or_max, default=DEFAULT_SPEED, metavar="V|max",
+                   help=f"top speed of the trajectory, {SPEED.describe()}: never exceeded, "
+                        "cruised at wherever the turns allow; max: as fast as the vehicle "
+                        f"can follow on the path (default: {DEFAULT_SPEED:g})")
     p.add_argument("--accel", type=acceleration, default=DEFAULT_ACCELERATION, metavar="A",
-                   help=f"largest acceleration of the trajectory, {ACCELERATION.describe()} "
-                        f"(default: {DEFAULT_ACCELERATION:g})")
+                   help=f"largest size of the acceleration vector, {ACCELERATION.describe()}"
+                        ": one budget for speeding up, braking and turning (default: "
+                        f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
+    add_timing_arguments(p)
     p.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
                    help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
                         f"(default: {DEFAULT_PRESET})")

@@ -11,6 +11,7 @@ from quadnav.cli.args import (
     acceleration,
     add_map_argument,
     add_margin_argument,
+    add_timing_arguments,
     number_in,
     output_folder,
     resolve_margin,
@@ -28,7 +29,7 @@ from quadnav.limits import (
 from quadnav.runfolder import replaced_folder
 from quadnav.trajectory.export import mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import Limits, feasibility
-from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
+from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.pathfile import read_path_csv
 from quadnav.trajectory.space import SafeSpace, trajectory_margins
@@ -47,21 +48,21 @@ def traj(args: argparse.Namespace) -> int:
     from quadnav.viz.trajectory_figures import states_figure, trajectory_3d_figure
 
     folder = output_folder(args.output)
-    settings = TrajectorySettings(method=args.method, v_max=args.vmax, a_max=args.amax,
-                                  corridor=args.corridor, optimize_times=args.optimize_times,
+    settings = TrajectorySettings(method=args.method, v_max=args.speed, a_max=args.accel,
+                                  timing=args.timing, corridor=args.corridor,
                                   yaw=YawMode(args.yaw))
     world = load_world(args.map)
     path = read_path_csv(args.path)
-    shortest = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) / args.vmax
-    check_duration(shortest, "raise --vmax", at_least=True)
+    shortest = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) / args.speed
+    check_duration(shortest, "raise --speed", at_least=True)
     check_count(shortest / args.dt + 1, MAX_SAMPLES, f"a trajectory of at least "
                 f"{shortest:.6g} s sampled every {args.dt:g} s gives samples",
-                "raise --dt or --vmax")
+                "raise --dt or --speed")
     space = SafeSpace(world, resolve_margin(args, world))
     trajectory = make_trajectory(path, settings, space)
-    check_duration(trajectory.duration, "raise --vmax or --amax")
+    check_duration(trajectory.duration, "raise --speed or --accel")
     # Clearance to the real blocks; a path may start on the boundary itself.
-    limits = Limits(v_max=args.vmax, a_max=args.amax)
+    limits = Limits(v_max=args.speed, a_max=args.accel)
     report = feasibility(trajectory, space.legs_world, limits, dt=args.dt)
     kept, kept_on_legs = trajectory_margins(trajectory, world)
     summary = {
@@ -78,7 +79,7 @@ def traj(args: argparse.Namespace) -> int:
                            ("trajectory.json", json.dumps(summary, indent=2) + "\n")):
             (staging / name).write_text(text)
         save_figure(trajectory_3d_figure(world, trajectory, path), staging / "trajectory.png")
-        save_figure(states_figure(trajectory, args.vmax, args.amax), staging / "states.png")
+        save_figure(states_figure(trajectory, args.speed, args.accel), staging / "states.png")
     print(f"{world.name}: {trajectory.method} through {len(trajectory.waypoints)} waypoints "
           f"({len(path)} in the path), {trajectory.duration:.2f} s")
     print(report.summary())
@@ -100,17 +101,15 @@ def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--path", required=True, metavar="CSV",
                    help="waypoints: a CSV with header x,y,z (as quadnav plan writes)")
     add_margin_argument(p)
-    p.add_argument("--method", choices=METHODS, default="minsnap",
-                   help="generator (default: minsnap)")
-    p.add_argument("--vmax", type=speed, default=DEFAULT_V_MAX, metavar="V",
-                   help=f"largest speed, {SPEED.describe()} (default: {DEFAULT_V_MAX:g})")
-    p.add_argument("--amax", type=acceleration, default=DEFAULT_A_MAX, metavar="A",
-                   help=f"largest acceleration, {ACCELERATION.describe()} "
-                        f"(default: {DEFAULT_A_MAX:g})")
+    p.add_argument("--speed", "--vmax", type=speed, default=DEFAULT_V_MAX, metavar="V",
+                   help=f"top speed, {SPEED.describe()}, as for quadnav fly (default: "
+                        f"{DEFAULT_V_MAX:g})")
+    p.add_argument("--accel", "--amax", type=acceleration, default=DEFAULT_A_MAX,
+                   metavar="A", help=f"largest size of the acceleration vector, "
+                                     f"{ACCELERATION.describe()} (default: {DEFAULT_A_MAX:g})")
+    add_timing_arguments(p)
     p.add_argument("--corridor", action="store_true",
                    help="minsnap as a QP inside safe corridors around the path")
-    p.add_argument("--optimize-times", action="store_true",
-                   help="optimise segment times for total time plus snap (minsnap)")
     p.add_argument("--yaw", choices=[m.value for m in YawMode], default="constant",
                    help="yaw reference (default: constant)")
     p.add_argument("--dt", type=number_in(SAMPLE_INTERVAL), default=DEFAULT_DT, metavar="S",

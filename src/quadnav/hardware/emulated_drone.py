@@ -39,7 +39,6 @@ from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
 from quadnav.sim.collision import body_grid
 from quadnav.sim.settings import SimSettings
-from quadnav.trajectory.timing import DEFAULT_A_MAX
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, rk4_step, vehicle_arrays
 from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
@@ -50,9 +49,9 @@ TAKEOFF_HEIGHT = 0.8
 #: Peak climb speed of ``takeoff`` and descent speed of ``land``, m/s.
 TAKEOFF_SPEED = 0.6
 LAND_SPEED = 0.5
-#: Peak acceleration of every motion and of the ``rc`` setpoint, m/s^2 (quadnav's own
-#: conservative planning limit).
-ACCELERATION = DEFAULT_A_MAX
+#: Peak acceleration of every motion and of the ``rc`` setpoint, m/s^2 (a gentle indoor
+#: Tello, about a 9 degree tilt).
+ACCELERATION = 1.5
 #: Peak yaw rate and yaw acceleration of ``cw``/``ccw``, rad/s and rad/s^2.
 TURN_RATE = math.radians(90.0)
 TURN_ACCELERATION = math.radians(180.0)

@@ -310,6 +310,10 @@ class FlightPlan:
                                (self.goal_room, t >= end)):
             region.check_track(track[inside], _in_zone("the trajectory", region))
 
+#: How a Tello flight's segments are timed: each from rest to rest, as the drone's ``go``
+#: commands fly them (and within what its ``rc`` sticks can follow under the lost-link
+#: bound); the ``fastest`` timing of simulated flights does not stop at waypoints.
+TELLO_TIMING = "rest-to-rest"
 
 def leg_rooms(fence: Geofence, problem: PlanningProblem) -> tuple[LegRoom, LegRoom]:
     """The rooms of the start's leg and of the goal's within ``fence``."""
@@ -421,14 +425,15 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         yaw: map heading the drone faces on the floor, rad.
         planner: planner name, as for ``quadnav fly``.
         planning: the planner's budget and seed.
-        trajectory: generator and limits; ``v_max`` is the cruise speed.
+        trajectory: generator and limits; ``v_max`` is the cruise speed; the timing is
+            always :data:`TELLO_TIMING`.
         progress: called with (fraction of the planning budget, best length m).
 
     Raises:
         QuadnavError: a bad query; NoPathError: no path; GeofenceError: a part of the
             flight that leaves the fence (or, in a zone, the leg's room).
     """
-    trajectory = trajectory or TrajectorySettings()
+    trajectory = (trajectory or TrajectorySettings()).replace(timing=TELLO_TIMING)
     with warnings.catch_warnings():  # the legs are flown as legs: no need to warn
         warnings.simplefilter("ignore", PlanningWarning)
         problem = make_problem(world, start, goal, margin + TRACKING_ALLOWANCE)

@@ -24,6 +24,7 @@ from quadnav.planning.result import distinct
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
+from quadnav.trajectory.feasibility import Limits
 from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
@@ -79,6 +80,8 @@ class TrajectorySettings:
             (``minsnap`` only).
         time_weight: weight of the total time against the snap cost, m^2/s^8
             (``snap-time`` timing).
+        vehicle: what the vehicle can fly; when given, the ``fastest`` timing also slows
+            where the roll and pitch rate would exceed its ``body_rate_max``.
         yaw: constant yaw, or facing the direction of travel.
         spacing: largest distance between positions checked for collisions, m.
         max_rounds: rounds of adding waypoints before giving up on a collision.
@@ -90,6 +93,7 @@ class TrajectorySettings:
     timing: str = "fastest"
     corridor: bool = False
     time_weight: float = 10.0
+    vehicle: Limits | None = None
     yaw: YawMode = YawMode.CONSTANT
     spacing: float = 0.02
     max_rounds: int = 10
@@ -218,7 +222,7 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
 
     trajectory = fly(points, times)
     if fastest:
-        return stretch_where_fast(trajectory, fly, v, a)
+        return stretch_where_fast(trajectory, fly, v, a, settings.vehicle)
     stretch = slow_down_factor(trajectory, v, a)
     if stretch > 1.0:
         trajectory = fly(trajectory.waypoints, stretch * trajectory.segment_times)

@@ -15,8 +15,10 @@ with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
    curve a little, so this repeats :data:`PROFILE_ROUNDS` times.
 3. :func:`stretch_where_fast` stretches the times of the segments whose speed or
    acceleration still exceeds a limit (a polynomial rounds off the profile's corners
-   and overshoots a little), and finally all of them alike if a few local rounds were
-   not enough — so the result is always within the limits.
+   and overshoots a little) — and, given the vehicle's :class:`Limits`, whose roll and
+   pitch rate does (quick turns at speed ask for fast rotations) — and finally all of
+   them alike if a few local rounds were not enough, so the result is always within the
+   speed and acceleration limits.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from quadnav.trajectory.feasibility import Limits, quantities
 from quadnav.trajectory.model import FloatArray, Trajectory
 from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
 
@@ -141,34 +144,40 @@ def fastest_times(points: FloatArray, times: FloatArray, build: Build, v_max: fl
     return times
 
 
-def segment_excess(trajectory: Trajectory, v_max: float, a_max: float) -> FloatArray:
+def segment_excess(trajectory: Trajectory, v_max: float, a_max: float,
+                   vehicle: Limits | None = None) -> FloatArray:
     """Per segment (S,), the factor by which its times must stretch to bring its sampled
-    peak speed within ``v_max`` m/s and acceleration within ``a_max`` m/s^2 (stretching
-    by k divides speeds by k and accelerations by k^2); <= 1 where it is within."""
+    peak speed within ``v_max`` m/s, acceleration within ``a_max`` m/s^2 and, given
+    ``vehicle``, roll/pitch rate within its ``body_rate_max`` (stretching by k divides
+    speeds by k, accelerations by k^2 and, about, the rate by k^3); <= 1 where within."""
     t, _, _ = _curve_samples(trajectory)
-    speed = np.linalg.norm(trajectory.velocity(t), axis=1)
-    acceleration = np.linalg.norm(trajectory.acceleration(t), axis=1)
-    excess = np.maximum(speed / v_max, np.sqrt(acceleration / a_max))
+    velocity, acceleration = trajectory.velocity(t), trajectory.acceleration(t)
+    excess = np.maximum(np.linalg.norm(velocity, axis=1) / v_max,
+                        np.sqrt(np.linalg.norm(acceleration, axis=1) / a_max))
+    if vehicle is not None and vehicle.body_rate_max is not None:
+        rate = quantities(velocity, acceleration, trajectory.jerk(t),
+                          vehicle)["max_body_rate"]
+        excess = np.maximum(excess, np.cbrt(rate / vehicle.body_rate_max))
     per_segment = excess[:-1].reshape(-1, SAMPLES_PER_SEGMENT).max(axis=1)
     ends = excess[SAMPLES_PER_SEGMENT::SAMPLES_PER_SEGMENT]  # the break ending each segment
     return np.maximum(per_segment, ends)
 
 
-def stretch_where_fast(trajectory: Trajectory, build: Build, v_max: float, a_max: float
-                       ) -> Trajectory:
-    """``trajectory`` rebuilt with longer times where its speed or acceleration exceeds
-    ``v_max`` m/s or ``a_max`` m/s^2: each offending segment and, half as much, its
-    neighbours, for up to :data:`LOCAL_STRETCH_ROUNDS` rounds, then every segment alike;
+def stretch_where_fast(trajectory: Trajectory, build: Build, v_max: float, a_max: float,
+                       vehicle: Limits | None = None) -> Trajectory:
+    """``trajectory`` rebuilt with longer times where it exceeds a limit (see
+    :func:`segment_excess`): each offending segment and, half as much, its neighbours,
+    for up to :data:`LOCAL_STRETCH_ROUNDS` rounds, then every segment alike;
     ``info["time_stretch"]`` is the final duration over the first."""
     first = trajectory.duration
     for _ in range(LOCAL_STRETCH_ROUNDS):
-        excess = segment_excess(trajectory, v_max, a_max)
+        excess = segment_excess(trajectory, v_max, a_max, vehicle)
         if excess.max() <= 1.0:
             break
         trajectory = build(trajectory.waypoints,
                            trajectory.segment_times * _local_stretch(excess))
     else:
-        excess = segment_excess(trajectory, v_max, a_max)
+        excess = segment_excess(trajectory, v_max, a_max, vehicle)
         if excess.max() > 1.0:
             factor = float(excess.max()) * (1.0 + STRETCH_ALLOWANCE)
             trajectory = build(trajectory.waypoints, trajectory.segment_times * factor)
