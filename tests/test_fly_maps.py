@@ -42,7 +42,7 @@ def _assert_clean_success(mission: Mission) -> None:
 def test_every_course_map_is_flown_at_one_two_and_three_metres_per_second(shared_maps, name):
     world, start, goal, margin = course_query(shared_maps, name)
     for speed in (1.0, 2.0, 3.0):
-        settings = MissionSettings(trajectory=TrajectorySettings(v_max=speed, a_max=1.5 * speed))
+        settings = MissionSettings(trajectory=TrajectorySettings(v_max=speed, a_max=3.0))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PlanningWarning)  # starts inside the margin
             mission = fly_mission(world, start, goal, margin, settings)

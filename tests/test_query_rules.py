@@ -9,6 +9,7 @@ that would work.
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import warnings
@@ -22,7 +23,8 @@ from quadnav.kinodynamic import KinoSettings
 from quadnav.kinodynamic.quadrotor import plan_quadrotor
 from quadnav.mission import MissionSettings, fly_mission, warn_if_margin_too_small
 from quadnav.planning import PlannerSettings, make_problem, plan
-from quadnav.sim.envelope import check_flyable
+from quadnav.sim.envelope import vehicle_limits
+from quadnav.trajectory.feasibility import feasibility
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import load_params
 from quadnav.world import World, load_world
@@ -122,7 +124,9 @@ def test_a_trajectory_the_vehicle_cannot_fly_is_refused_with_what_would_work(tmp
     world = load_world("forest")
     settings = MissionSettings(trajectory=TrajectorySettings(v_max=speed, a_max=accel))
     mission = fly_mission(world, None, None, None, settings)
-    check_flyable(mission.trajectory, settings.vehicle, settings.gains, speed, accel)
+    assert mission.success
+    limits = vehicle_limits(settings.vehicle, settings.gains)
+    assert feasibility(mission.trajectory, None, limits).ok
     assert mission.success
 
 
@@ -135,3 +139,22 @@ def test_a_margin_that_cannot_hold_the_body_is_warned_about():
         warnings.simplefilter("error")
         warn_if_margin_too_small(0.2, tello)
     assert math.isclose(0.5 * float((tello.body_size**2).sum()) ** 0.5, 0.075)
+
+
+def test_speed_max_flies_the_fastest_trajectory_the_vehicle_can_follow(tmp_path):
+    fastest = run("fly", "--speed", "max", "-o", tmp_path / "max", "--quiet", "--no-figures")
+    assert fastest.returncode == 0, fastest.stderr
+    default = run("fly", "-o", tmp_path / "default", "--quiet", "--no-figures")
+    assert default.returncode == 0, default.stderr
+    metrics = {name: json.loads((tmp_path / name / "metrics.json").read_text())
+               for name in ("max", "default")}
+    assert metrics["max"]["success"]
+    assert metrics["max"]["speed_m_s"] > 2 * metrics["default"]["speed_m_s"]
+    assert metrics["max"]["trajectory_duration_s"] < 0.6 * metrics["default"][
+        "trajectory_duration_s"]
+    # What it flew is within every limit of the vehicle (checked again here).
+    settings = MissionSettings(fastest=True)
+    mission = fly_mission(load_world("forest"), None, None, None, settings)
+    assert mission.settings.trajectory.v_max == pytest.approx(metrics["max"]["speed_m_s"])
+    limits = vehicle_limits(settings.vehicle, settings.gains)
+    assert feasibility(mission.trajectory, None, limits).ok

@@ -142,3 +142,14 @@ def test_a_bad_profile_input_is_refused():
         fastest_speeds([0.0, 1.0], [0.0, 0.0], 0.0, 1.0)
     with pytest.raises(QuadnavError, match="unknown timing"):
         TrajectorySettings(timing="quick")
+
+
+def test_corridors_on_map1_at_the_default_limits(shared_maps):
+    # Once "Clarabel: InsufficientProgress" on the README's own map1 path.
+    world, start, goal, margin = course_query(shared_maps, "rbe595/map1.txt")
+    path = _planned(world, start, goal, margin)
+    trajectory = make_trajectory(path, TrajectorySettings(corridor=True),
+                                 SafeSpace(world, margin))
+    kept, _ = trajectory_margins(trajectory, world)
+    assert kept >= margin - CHECK_TOLERANCE
+    assert least_progress(trajectory) >= -2e-3

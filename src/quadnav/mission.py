@@ -22,16 +22,14 @@ from numpy.typing import ArrayLike
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.errors import PlanningWarning
-from quadnav.limits import ACCELERATION, SPEED
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import path_length
-from quadnav.sim.envelope import check_flyable, vehicle_limits
+from quadnav.sim.envelope import flyable_trajectory
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
-from quadnav.trajectory.feasibility import slowest_feasible_scale
-from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
+from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
@@ -47,8 +45,6 @@ DEFAULT_ACCELERATION = DEFAULT_A_MAX
 #: wall-time cap in seconds on the whole search. The first path takes as many samples as
 #: it needs, so the same seed flies the same flight unless the time cap ends the search.
 DEFAULT_IMPROVE = 50_000
-#: Rounds of slowing a ``fastest`` trajectory down until the vehicle can fly it.
-FASTEST_ROUNDS = 3
 DEFAULT_TIME_CAP = 10.0
 
 
@@ -267,35 +263,15 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     if not result.solved:
         return Mission(problem, result, raw_length, None, None, timings, settings)
     began = time.perf_counter()
-    trajectory, chosen = _make_flyable_trajectory(result.path, SafeSpace(world, problem.margin),
-                                                  settings)
+    trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,
+                                            SafeSpace(world, problem.margin),
+                                            settings.vehicle, settings.gains, settings.fastest)
     settings = dataclasses.replace(settings, trajectory=chosen)
     timings["trajectory"] = time.perf_counter() - began
-    check_flyable(trajectory, settings.vehicle, settings.gains, chosen.v_max, chosen.a_max)
     flight = simulate(trajectory, settings.vehicle, settings.gains, world, settings.sim,
                       flight_progress)
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
-
-
-def _make_flyable_trajectory(path: FloatArray, space: SafeSpace, settings: MissionSettings
-                             ) -> tuple[Trajectory, TrajectorySettings]:
-    """The trajectory through ``path`` (N, 3) and the settings that made it: those of
-    ``settings``, told the vehicle's limits; with ``settings.fastest`` the vehicle's top
-    speed and acceleration, slowed as a whole until every vehicle limit holds."""
-    vehicle = vehicle_limits(settings.vehicle, settings.gains)
-    chosen = settings.trajectory.replace(vehicle=vehicle)
-    if settings.fastest:
-        chosen = chosen.replace(v_max=min(vehicle.v_max, SPEED.high),
-                                a_max=min(vehicle.a_max, ACCELERATION.high))
-    trajectory = make_trajectory(path, chosen, space)
-    for _ in range(FASTEST_ROUNDS if settings.fastest else 0):
-        scale = slowest_feasible_scale(trajectory, vehicle)
-        if scale is None or scale <= 1.0:
-            break
-        chosen = chosen.replace(v_max=chosen.v_max / scale, a_max=chosen.a_max / scale**2)
-        trajectory = make_trajectory(path, chosen, space)
-    return trajectory, chosen
 
 
 def warn_if_margin_too_small(margin: float, vehicle: VehicleParams) -> None:

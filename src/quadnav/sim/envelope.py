@@ -4,8 +4,9 @@ The vehicle's rotors and the controller's saturations bound what a trajectory ma
 the collective thrust (within the rotors' range, as the controller clips it), the tilt,
 the roll and pitch rates and the (horizontal) speed. A trajectory may use :data:`HEADROOM` of each,
 so the feedback that corrects tracking errors keeps the rest. :func:`check_flyable`
-refuses a trajectory that asks for more, with the limit it breaks and the fastest
-``--speed``/``--accel`` that would fly the same path within every limit.
+(:func:`flyable_trajectory`) makes the trajectory, and refuses one that asks for more with
+the limit it breaks and the fastest ``--speed``/``--accel`` that flies the same path
+within every limit — or, for ``--speed max``, flies that one.
 """
 
 from __future__ import annotations
@@ -16,18 +17,22 @@ import numpy as np
 
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
+from quadnav.limits import ACCELERATION, SPEED
 from quadnav.trajectory.feasibility import (
     GRAVITY,
-    FeasibilityReport,
     Limits,
     feasibility,
     slowest_feasible_scale,
 )
-from quadnav.trajectory.model import Trajectory
+from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
+from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.space import SafeSpace
 from quadnav.vehicle.params import VehicleParams
 
 #: Fraction of each limit a trajectory may use; feedback keeps the rest.
 HEADROOM = 0.9
+#: Rounds of slowing a trajectory down (remaking it each time) until the vehicle flies it.
+SLOWING_ROUNDS = 4
 
 
 def vehicle_limits(vehicle: VehicleParams, gains: Gains) -> Limits:
@@ -46,27 +51,58 @@ def vehicle_limits(vehicle: VehicleParams, gains: Gains) -> Limits:
     )
 
 
-def check_flyable(trajectory: Trajectory, vehicle: VehicleParams, gains: Gains,
-                  speed: float, acceleration: float) -> FeasibilityReport:
-    """The feasibility report of ``trajectory`` against :func:`vehicle_limits`;
-    QuadnavError naming the broken limit and the fastest settings that would work when
-    it is not flyable.
+def flyable_trajectory(path: FloatArray, settings: TrajectorySettings, space: SafeSpace,
+                       vehicle: VehicleParams, gains: Gains, fastest: bool = False
+                       ) -> tuple[Trajectory, TrajectorySettings]:
+    """The trajectory through ``path`` (N, 3) that ``vehicle`` flies, and the settings
+    that made it: ``settings``, told the vehicle's :func:`vehicle_limits` (so the timing
+    slows where the roll/pitch rate would exceed them) — or, with ``fastest``, the
+    vehicle's own top speed and acceleration, slowed as a whole until every limit holds.
 
-    Args:
-        trajectory: the reference to fly.
-        vehicle: the simulated quadrotor.
-        gains: the controller, whose saturations count as limits.
-        speed: the top speed the trajectory was made with, m/s (for the advice).
-        acceleration: its acceleration limit, m/s^2 (for the advice).
+    Raises:
+        QuadnavError: the trajectory breaks a limit (not ``fastest``): the line names the
+            limit and the fastest ``--speed``/``--accel`` at which the same path flies
+            within every limit, found by making and checking that trajectory.
     """
     limits = vehicle_limits(vehicle, gains)
+    chosen = settings.replace(vehicle=limits)
+    if fastest:
+        chosen = chosen.replace(v_max=min(limits.v_max, SPEED.high),
+                                a_max=min(limits.a_max, ACCELERATION.high))
+    trajectory = make_trajectory(path, chosen, space)
     report = feasibility(trajectory, None, limits)
     if report.ok:
-        return report
-    scale = slowest_feasible_scale(trajectory, limits)
-    advice = ("no slower flight of it would either" if scale is None else
-              f"the same path flies within every limit at --speed {speed / scale:.3g} "
-              f"--accel {acceleration / scale**2:.3g} or less")
+        return trajectory, chosen
+    slower = _slowed(path, chosen, space, trajectory, limits)
+    if slower is not None and fastest:
+        return slower
+    advice = ("no slower flight of it would either" if slower is None else
+              f"the same path flies within every limit at --speed "
+              f"{_down(slower[1].v_max):g} --accel {_down(slower[1].a_max):g} or less")
     raise QuadnavError(f"the {vehicle.name} vehicle cannot fly this trajectory: "
                        f"{report.violations[0]} (with {1 - HEADROOM:.0%} kept for control); "
                        f"{advice}")
+
+
+def _slowed(path: FloatArray, settings: TrajectorySettings, space: SafeSpace,
+            trajectory: Trajectory, limits: Limits
+            ) -> tuple[Trajectory, TrajectorySettings] | None:
+    """A slower trajectory through ``path`` within ``limits`` and its settings: the top
+    speed and acceleration lowered by the factor that would slow ``trajectory`` into the
+    limits, for up to :data:`SLOWING_ROUNDS` rounds; None if none is within."""
+    for _ in range(SLOWING_ROUNDS):
+        scale = slowest_feasible_scale(trajectory, limits)
+        if scale is None:
+            return None
+        settings = settings.replace(v_max=_down(settings.v_max / scale),
+                                    a_max=_down(settings.a_max / scale**2))
+        trajectory = make_trajectory(path, settings, space)
+        if feasibility(trajectory, None, limits).ok:
+            return trajectory, settings
+    return None
+
+
+def _down(value: float) -> float:
+    """``value`` > 0 rounded down to 3 significant digits (advice that stays within)."""
+    step = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return round(math.floor(value / step + 1e-9) * step, 12)
