@@ -179,8 +179,9 @@ def test_states_figure_plots_desired_and_actual_per_axis(which, request):
     assert len(fig.axes) == 6
     axes = np.array(fig.axes).reshape(3, 2)
     wanted_velocity = desired_velocity(run)
-    # The velocity read back from trajectory.csv is the one the controller was given.
-    assert np.allclose(wanted_velocity, original.flight.reference[:, 3:6], atol=1e-6)
+    # The velocity read back from trajectory.csv is the one the controller was given (a
+    # crash ends between two 10 ms rows, where interpolating is off by jerk dt^2 / 8).
+    assert np.allclose(wanted_velocity, original.flight.reference[:, 3:6], atol=1e-4)
     columns = ((flight.reference, flight.position, "m)"),
                (wanted_velocity, flight.velocity, "m/s)"))
     for column, (desired, actual, unit) in enumerate(columns):
