@@ -1,7 +1,7 @@
 """Benchmark: minimum snap through 50 waypoints — closed form and Clarabel QPs against SLSQP.
 
-Run: ``python bench/trajectory.py [--repeats 11] [--baseline-repeats 3]``, or
-``python bench/trajectory.py --quick`` for a smoke run (3 and 1 repeats).
+Run: ``python bench/minsnap.py [--repeats 11] [--baseline-repeats 3]``, or
+``python bench/minsnap.py --quick`` for a smoke run (3 and 1 repeats).
 
 Two sets of 50 waypoints, with segment times of distance / 1 m/s: a seeded random 3D
 walk (steps of 1-3 m in random directions), and a refined RRT* plan through the built-in
