@@ -91,12 +91,16 @@ def test_only_the_leg_from_a_start_on_the_boundary_is_inside_the_margin(shared_m
     trajectory = make_trajectory(path, TrajectorySettings(), space)
     assert np.array_equal(trajectory.position(0.0), [0.0, -5.0, 0.0])
     begin, end = trajectory.main_window
-    assert 0 < begin == trajectory.breaks[1] and end == trajectory.duration
+    legs = trajectory.leg_segments[0]  # the leg's segment, with waypoints added on it
+    assert legs >= 1 and 0 < begin == trajectory.breaks[legs] and end == trajectory.duration
     # The leg is flown straight, from rest to rest, exactly along the path's first segment.
     t = np.linspace(0.0, begin, 200)
     along = trajectory.position(t) - path[0]
     direction = (path[1] - path[0]) / np.linalg.norm(path[1] - path[0])
     assert np.allclose(along - np.outer(along @ direction, direction), 0.0, atol=1e-12)
+    progress = along @ direction  # forward only, never past the leg's end
+    assert np.all(np.diff(progress) >= -1e-12)
+    assert progress.max() <= np.linalg.norm(path[1] - path[0]) + 1e-12
     assert np.allclose(trajectory.velocity([0.0, begin]), 0.0, atol=1e-12)
     kept, on_leg = trajectory_margins(trajectory, world)
     assert kept >= 0.199 and on_leg == pytest.approx(0.0, abs=1e-12)

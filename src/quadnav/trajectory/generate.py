@@ -175,9 +175,10 @@ def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = 
 
 def leg_pieces(leg: FloatArray, settings: TrajectorySettings) -> list[Trajectory]:
     """The trajectories (one per segment of the polyline ``leg`` (K, 3)) that fly a leg
-    out of the margin: each segment straight from rest to rest, at :data:`LEG_SLOW_DOWN`
+    out of the margin: each segment straight from rest to rest (with the ``fastest``
+    timing's waypoints added on it, so it stays on the segment), at :data:`LEG_SLOW_DOWN`
     of the limits of ``settings``."""
-    straight = settings.replace(corridor=False, timing="rest-to-rest",  # two points: a line
+    straight = settings.replace(corridor=False, timing="fastest",  # collinear points: a line
                                 v_max=LEG_SLOW_DOWN * settings.v_max,
                                 a_max=LEG_SLOW_DOWN * settings.a_max)
     return [_piece(leg[i:i + 2], straight, None) for i in range(len(leg) - 1)]
@@ -190,7 +191,13 @@ def join_legs(first: list[Trajectory], main: list[Trajectory], last: list[Trajec
     with the main piece's solver facts and the yaw of ``settings``."""
     pieces = [*first, *main, *last]
     joined = concatenate(pieces, settings.method, (main or pieces)[0].info)
-    return joined.replace(yaw_mode=settings.yaw, leg_segments=(len(first), len(last)))
+    return joined.replace(yaw_mode=settings.yaw, leg_segments=(_segments(first),
+                                                                 _segments(last)))
+
+
+def _segments(pieces: list[Trajectory]) -> int:
+    """How many segments ``pieces`` have together."""
+    return sum(len(piece.segment_times) for piece in pieces)
 
 
 def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World | None

@@ -41,6 +41,8 @@ KNOT_INTERVAL = 0.4
 #: Added waypoints closer than this fraction of a cruise interval to a path vertex are
 #: dropped (a very short segment beside a corner only sharpens it).
 VERTEX_CLEARANCE = 0.3
+#: Samples of the rest-to-rest move's clock, to find when it passes each vertex.
+_CLOCK_SAMPLES = 2001
 #: Rounds of "build the curve, time it along its own fastest speed".
 PROFILE_ROUNDS = 3
 #: Fraction of the acceleration limit the speed profile plans with: the polynomials
@@ -82,18 +84,21 @@ def knots(points: FloatArray, v_max: float, a_max: float,
 
     They sit where a rest-to-rest move along the whole path (its corners ignored) with
     ``v_max`` m/s and ``a_max`` m/s^2 would be every ``interval`` s — closer together
-    where it speeds up and slows down — every vertex kept, and none closer than
-    :data:`VERTEX_CLEARANCE` of a cruise interval to a vertex.
+    where it speeds up and slows down — every vertex kept, and none within
+    :data:`VERTEX_CLEARANCE` of an interval of a vertex in that move's time.
     """
     cumulative = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0),
                                                                  axis=1))])
     length = float(cumulative[-1])
     duration = rest_to_rest_duration(length, v_max, a_max)
     count = max(1, math.ceil(duration / interval))
+    times = np.linspace(0.0, duration, count + 1)[1:-1]
+    clock = np.linspace(0.0, duration, _CLOCK_SAMPLES)
+    vertex_times = np.interp(cumulative, rest_to_rest_distance(length, v_max, a_max, clock),
+                             clock)
+    gap = np.abs(times[:, None] - vertex_times[None, :]).min(axis=1, initial=np.inf)
     added = rest_to_rest_distance(length, v_max, a_max,
-                                  np.linspace(0.0, duration, count + 1)[1:-1])
-    gap = np.abs(added[:, None] - cumulative[None, :]).min(axis=1)
-    added = added[gap > VERTEX_CLEARANCE * v_max * interval]
+                                  times[gap > VERTEX_CLEARANCE * interval])
     along = np.concatenate([cumulative, added])
     order = np.argsort(along, kind="stable")
     is_vertex = order < len(points)
