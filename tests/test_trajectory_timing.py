@@ -153,3 +153,15 @@ def test_corridors_on_map1_at_the_default_limits(shared_maps):
     kept, _ = trajectory_margins(trajectory, world)
     assert kept >= margin - CHECK_TOLERANCE
     assert least_progress(trajectory) >= -2e-3
+
+
+def test_the_speed_profile_starts_and_stops_within_a_jerk():
+    # From rest at jerk j the acceleration is a = j t and the distance d = j t^3 / 6, so
+    # a <= (6 d j^2)^(1/3): at 1 mm from either end with j = 15 m/s^3, 1.13 m/s^2.
+    s = np.linspace(0.0, 10.0, 10_001)
+    free = fastest_speeds(s, np.zeros_like(s), 2.0, 3.0)
+    ramped = fastest_speeds(s, np.zeros_like(s), 2.0, 3.0, start_jerk=15.0)
+    assert np.all(ramped <= free + 1e-12) and ramped.max() == pytest.approx(2.0)
+    speeding_up = np.diff(ramped[:20] ** 2) / (2 * np.diff(s[:20]))  # sddot over each step
+    assert np.all(speeding_up <= np.cbrt(6.0 * s[1:20] * 15.0**2) + 1e-9)
+    assert travel_times(s, ramped)[-1] > travel_times(s, free)[-1]

@@ -12,7 +12,9 @@ with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
 2. :func:`fastest_times` builds the trajectory, finds the fastest speed along its own
    curve within the limits (:func:`~quadnav.trajectory.speed_profile.fastest_speeds`),
    and gives each segment the time that speed takes over it; the new times change the
-   curve a little, so this repeats :data:`PROFILE_ROUNDS` times.
+   curve a little, so this repeats :data:`PROFILE_ROUNDS` times. The profile lets the
+   acceleration grow from rest over :data:`RAMP_TIME` (a minimum-snap trajectory starts
+   and stops with zero acceleration and jerk, so it cannot jump to the limit).
 3. :func:`stretch_where_fast` stretches the times of the segments whose speed or
    acceleration still exceeds a limit (a polynomial rounds off the profile's corners
    and overshoots a little) — and, given the vehicle's :class:`Limits`, whose roll and
@@ -43,6 +45,8 @@ KNOT_INTERVAL = 0.4
 VERTEX_CLEARANCE = 0.3
 #: Samples of the rest-to-rest move's clock, to find when it passes each vertex.
 _CLOCK_SAMPLES = 2001
+#: Time, s, in which the speed profile's acceleration may grow from rest to the limit.
+RAMP_TIME = 0.2
 #: Rounds of "build the curve, time it along its own fastest speed".
 PROFILE_ROUNDS = 3
 #: Fraction of the acceleration limit the speed profile plans with: the polynomials
@@ -134,7 +138,8 @@ def profile_times(trajectory: Trajectory, v_max: float, a_max: float) -> FloatAr
     within ``v_max`` m/s and ``a_max`` m/s^2, from rest to rest, takes over each of its
     segments."""
     _, arc, curvature = _curve_samples(trajectory)
-    passing = travel_times(arc, fastest_speeds(arc, curvature, v_max, a_max))
+    passing = travel_times(arc, fastest_speeds(arc, curvature, v_max, a_max,
+                                               a_max / RAMP_TIME))
     return np.diff(passing[::SAMPLES_PER_SEGMENT])
 
 
