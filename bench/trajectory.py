@@ -163,16 +163,23 @@ def course_maps(names: list[str] | None) -> list[tuple[str, World, np.ndarray, n
             if names is None or name in names]
 
 
-def cases(quick: bool) -> list[Case]:
-    """The refined paths of the course maps and the built-in worlds (a few with ``quick``)."""
+def queries(quick: bool) -> list[tuple[str, World, np.ndarray, np.ndarray, float]]:
+    """(name, world, start, goal, margin) of every course map with a path and every
+    built-in world (a few with ``quick``)."""
     names = list(QUICK) if quick else None
-    queries = course_maps(names)
+    found = course_maps(names)
     for name in world_names():
         if names is None or name in names:
             world = load_world(name)
-            queries.append((name, world, world.start, world.goal, world.margin))
-    found = [refined_path(*query) for query in queries]
-    for query, case in zip(queries, found, strict=True):
+            found.append((name, world, world.start, world.goal, world.margin))
+    return found
+
+
+def cases(quick: bool) -> list[Case]:
+    """The refined paths of the course maps and the built-in worlds (a few with ``quick``)."""
+    found_queries = queries(quick)
+    found = [refined_path(*query) for query in found_queries]
+    for query, case in zip(found_queries, found, strict=True):
         if case is None:
             print(f"note: no path found on {query[0]}; skipped")
     return [case for case in found if case is not None]

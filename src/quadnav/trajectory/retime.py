@@ -40,8 +40,9 @@ Build = Callable[[FloatArray, FloatArray], Trajectory]
 #: Flight time between added waypoints, s: long enough for a round curve through a
 #: corner, short enough for the polynomials to follow the speed profile.
 KNOT_INTERVAL = 0.4
-#: Added waypoints closer than this fraction of a cruise interval to a path vertex are
-#: dropped (a very short segment beside a corner only sharpens it).
+#: Added waypoints within this fraction of an interval of a path vertex (in the time of
+#: the rest-to-rest move along the path) are dropped: a very short segment beside a
+#: corner only sharpens it.
 VERTEX_CLEARANCE = 0.3
 #: Samples of the rest-to-rest move's clock, to find when it passes each vertex.
 _CLOCK_SAMPLES = 2001
