@@ -158,3 +158,18 @@ def test_speed_max_flies_the_fastest_trajectory_the_vehicle_can_follow(tmp_path)
     assert mission.settings.trajectory.v_max == pytest.approx(metrics["max"]["speed_m_s"])
     limits = vehicle_limits(settings.vehicle, settings.gains)
     assert feasibility(mission.trajectory, None, limits).ok
+
+
+def test_a_climb_beyond_the_thrust_is_refused_with_the_acceleration_that_flies(tmp_path):
+    # Climbing at 20 m/s^2 asks the 80 g Tello for twice its weight in thrust.
+    climb = ("empty:size=10x10x10", "--start", "5", "5", "1", "--goal", "5", "5", "9")
+    result = run("fly", *climb, "--speed", "3", "--accel", "20", "-o", tmp_path / "out",
+                 "--quiet", "--no-figures")
+    assert_user_error(result, "cannot fly this trajectory: thrust-to-weight ratio",
+                      "exceeds the limit", "flies within every limit at --speed 3 --accel")
+    accel = float(result.stderr.split("--accel ")[1].split()[0])
+    assert 3.0 < accel < 20.0  # the speed is kept; only the acceleration is lowered
+    advised = run("fly", *climb, "--speed", "3", "--accel", str(accel), "-o",
+                  tmp_path / "advised", "--quiet", "--no-figures")
+    assert advised.returncode == 0, advised.stderr
+    assert json.loads((tmp_path / "advised" / "metrics.json").read_text())["success"]

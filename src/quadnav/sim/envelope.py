@@ -87,15 +87,18 @@ def flyable_trajectory(path: FloatArray, settings: TrajectorySettings, space: Sa
 def _slowed(path: FloatArray, settings: TrajectorySettings, space: SafeSpace,
             trajectory: Trajectory, limits: Limits
             ) -> tuple[Trajectory, TrajectorySettings] | None:
-    """A slower trajectory through ``path`` within ``limits`` and its settings: the top
-    speed and acceleration lowered by the factor that would slow ``trajectory`` into the
-    limits, for up to :data:`SLOWING_ROUNDS` rounds; None if none is within."""
+    """A slower trajectory through ``path`` within ``limits`` and its settings: the
+    acceleration limit (and the top speed too, if the speed is what breaks a limit)
+    lowered by the factor that would slow ``trajectory`` into the limits, for up to
+    :data:`SLOWING_ROUNDS` rounds; None if none is within."""
     for _ in range(SLOWING_ROUNDS):
         scale = slowest_feasible_scale(trajectory, limits)
         if scale is None:
             return None
-        settings = settings.replace(v_max=_down(settings.v_max / scale),
-                                    a_max=_down(settings.a_max / scale**2))
+        too_fast = feasibility(trajectory, None, limits).max_speed.value > limits.v_max
+        settings = settings.replace(
+            v_max=_down(settings.v_max / scale) if too_fast else settings.v_max,
+            a_max=_down(settings.a_max / scale**2))
         trajectory = make_trajectory(path, settings, space)
         if feasibility(trajectory, None, limits).ok:
             return trajectory, settings
