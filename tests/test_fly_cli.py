@@ -94,7 +94,10 @@ def test_no_path_exits_1_with_metrics_only(tmp_path):
 
 @pytest.mark.parametrize(("args", "fragments"), [
     (["--params", "boeing"], ["boeing", "expected a vehicle preset"]),
-    (["--speed", "-2"], ["--speed", "expected from 0.01 to 100 m/s"]),
+    (["--speed", "-2"], ["--speed", "expected from 0.01 to 100 m/s or max"]),
+    (["--speed", "fastest"], ["--speed", "or max, got 'fastest'"]),
+    (["--method", "spline"], ["--method", "invalid choice: 'spline'"]),
+    (["--timing", "snap-time", "--method", "cubic"], ["snap-time timing need method minsnap"]),
     (["--physics-rate", "1500"], ["whole multiple of the control rate"]),
     (["--settle", "-1"], ["--settle", "expected from 0 to 60 s"]),
     (["--gains", "/nonexistent/gains.toml"], ["/nonexistent/gains.toml", "cannot read"]),

@@ -73,7 +73,13 @@ speed = number_in(SPEED)
 def speed_or_max(text: str) -> float | None:
     """argparse type of ``--speed V|max``: a top speed in :data:`SPEED`, or ``None`` for
     ``max`` (as fast as the vehicle can follow)."""
-    return None if text.strip().lower() == "max" else speed(text)
+    if text.strip().lower() == "max":
+        return None
+    try:
+        return speed(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"expected {SPEED.describe()} or max, got "
+                                         f"{text[:40]!r}") from None
 
 
 acceleration = number_in(ACCELERATION)
