@@ -26,6 +26,7 @@ def test_plan_then_traj_writes_every_file(tmp_path):
     assert np.allclose(table[0, 1:4], path[0]) and np.allclose(table[-1, 1:4], path[-1])
     summary = json.loads((out / "trajectory.json").read_text())
     assert summary["method"] == "minsnap" and summary["duration"] == pytest.approx(table[-1, 0])
+    assert (summary["timing"], summary["speed"], summary["acceleration"]) == ("fastest", 2, 3)
     assert summary["feasibility"]["min_clearance"]["value"] > 0.2
     for name in ("trajectory.png", "states.png"):
         assert (out / name).read_bytes()[:4] == b"\x89PNG"

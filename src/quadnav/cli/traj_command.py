@@ -67,6 +67,7 @@ def traj(args: argparse.Namespace) -> int:
     kept, kept_on_legs = trajectory_margins(trajectory, world)
     summary = {
         "map": world.name, "path": str(args.path), "method": trajectory.method,
+        "timing": settings.timing, "speed": settings.v_max, "acceleration": settings.a_max,
         "margin": space.margin, "margin_kept": kept, "margin_kept_on_legs": kept_on_legs,
         "legs": list(trajectory.legs), "duration": trajectory.duration,
         "waypoints_in": len(path), "waypoints": len(trajectory.waypoints),
