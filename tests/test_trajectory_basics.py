@@ -65,10 +65,10 @@ def test_cubic_passes_waypoints_at_rest_and_is_c2(maze_path):
 def test_quintic_interior_velocity_follows_the_documented_rule():
     corner = quintic_segments([[0, 0, 0], [1, 0, 0], [1, 1, 0]], [1.0, 1.0], cruise_speed=0.5)
     np.testing.assert_allclose(corner.velocity(1.0), [0.25, 0.25, 0.0], atol=1e-12)
-    # Straight on: the cruise speed 5 m/s is capped by the segments' mean speeds 1 and 2 m/s,
-    # averaged.
+    # Straight on: the cruise speed 5 m/s is capped by the harmonic mean of the segments'
+    # mean speeds 1 and 2 m/s, 4/3 m/s.
     straight = quintic_segments([[0, 0, 0], [1, 0, 0], [3, 0, 0]], [1.0, 1.0], cruise_speed=5)
-    np.testing.assert_allclose(straight.velocity(1.0), [1.5, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(straight.velocity(1.0), [4 / 3, 0.0, 0.0], atol=1e-12)
     back = quintic_segments([[0, 0, 0], [0, 0, 2], [0, 0, 0]], [2.0, 2.0], cruise_speed=1)
     np.testing.assert_allclose(back.velocity(2.0), 0.0, atol=1e-12)
     assert straight.info == {"cruise_speed": 5.0}
@@ -89,7 +89,7 @@ def test_quintic_segments_end_conditions_and_c1(maze_path):
     bisector = units[:-1] + units[1:]
     cross = np.cross(velocity, bisector)
     assert np.abs(cross).max() < 1e-12 and np.all(np.einsum("ia,ia->i", velocity, bisector) >= 0)
-    cap = np.minimum(DEFAULT_V_MAX, (lengths[:-1] / times[:-1] + lengths[1:] / times[1:]) / 2)
+    cap = np.minimum(DEFAULT_V_MAX, 2 / (times[:-1] / lengths[:-1] + times[1:] / lengths[1:]))
     np.testing.assert_allclose(np.linalg.norm(velocity, axis=1),
                                cap * np.linalg.norm(bisector, axis=1) / 2, rtol=1e-12)
     for order in range(3):  # acceleration: zero on both sides

@@ -55,10 +55,10 @@ def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float
     waypoint ``i`` the acceleration is zero and the velocity is
     ``s * (u_in + u_out) / 2``, with ``u_in`` and ``u_out`` the unit directions of the
     segments arriving and leaving and
-    ``s = min(cruise_speed, (L_in / T_in + L_out / T_out) / 2)`` (the cruise speed, capped
-    by the two segments' mean speeds so a short or slow segment does not overshoot; their
-    average, so a waypoint where the flight speeds up or slows down is passed at the speed
-    in between). It points along the normalised sum of the two directions
+    ``s = min(cruise_speed, 2 / (T_in / L_in + T_out / L_out))`` (the cruise speed, capped
+    by the harmonic mean of the two segments' mean speeds: a waypoint where the flight
+    speeds up or slows down is passed at a speed in between, and one beside a short, slow
+    segment slowly enough that the segment does not overshoot and back up). It points along the normalised sum of the two directions
     (the bisector of the turn) and its magnitude is ``s cos(turn / 2)``: full speed on a
     straight line, slower in turns, zero where the path doubles back.
 
@@ -80,7 +80,7 @@ def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float
     lengths = segment_lengths(points)
     directions = np.diff(points, axis=0) / lengths[:, None]
     mean_speeds = lengths / durations
-    speeds = np.minimum(cruise_speed, (mean_speeds[:-1] + mean_speeds[1:]) / 2)
+    speeds = np.minimum(cruise_speed, 2.0 / (1.0 / mean_speeds[:-1] + 1.0 / mean_speeds[1:]))
     states = np.zeros((len(points), 3, 3))
     states[:, 0] = points
     states[1:-1, 1] = speeds[:, None] * (directions[:-1] + directions[1:]) / 2

@@ -137,11 +137,15 @@ def _curve_samples(trajectory: Trajectory) -> tuple[FloatArray, FloatArray, Floa
 def profile_times(trajectory: Trajectory, v_max: float, a_max: float) -> FloatArray:
     """Segment times (S,), s: how long the fastest flight along ``trajectory``'s curve,
     within ``v_max`` m/s and ``a_max`` m/s^2, from rest to rest, takes over each of its
-    segments."""
+    segments — shortened where a segment's curve is longer than its chord."""
     _, arc, curvature = _curve_samples(trajectory)
     passing = travel_times(arc, fastest_speeds(arc, curvature, v_max, a_max,
                                                a_max / RAMP_TIME))
-    return np.diff(passing[::SAMPLES_PER_SEGMENT])
+    # A segment whose curve is longer than its chord (a wiggle) is not given the time to
+    # fly the wiggle, or the next curve would wiggle more: its time shrinks by the ratio.
+    chords = np.linalg.norm(np.diff(trajectory.waypoints, axis=0), axis=1)
+    stretches = np.diff(arc[::SAMPLES_PER_SEGMENT])
+    return np.diff(passing[::SAMPLES_PER_SEGMENT]) * np.minimum(1.0, chords / stretches)
 
 
 def fastest_times(points: FloatArray, times: FloatArray, build: Build, v_max: float,
