@@ -58,9 +58,10 @@ def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float
     ``s = min(cruise_speed, 2 / (T_in / L_in + T_out / L_out))`` (the cruise speed, capped
     by the harmonic mean of the two segments' mean speeds: a waypoint where the flight
     speeds up or slows down is passed at a speed in between, and one beside a short, slow
-    segment slowly enough that the segment does not overshoot and back up). It points along the normalised sum of the two directions
-    (the bisector of the turn) and its magnitude is ``s cos(turn / 2)``: full speed on a
-    straight line, slower in turns, zero where the path doubles back.
+    segment slowly enough that the segment does not overshoot and back up). It points
+    along the normalised sum of the two directions (the bisector of the turn) and its
+    magnitude is ``s cos(turn / 2)``: full speed on a straight line, slower in turns, zero
+    where the path doubles back.
 
     Args:
         waypoints: (N, 3) points, metres, N >= 2, no two consecutive ones equal.
