@@ -211,15 +211,6 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
     if settings.corridor and free_world is not None:
         points, _ = safe_corridors(free_world, points)
     build = _generator(settings, free_world)
-    if settings.method == "quintic-average":
-        times = average_times(points, v)
-    else:
-        times = trapezoidal_times(points, v, a)
-    if fastest:
-        times = fastest_times(points, times, build, v, a)
-    elif settings.timing == "snap-time":
-        times = optimize_times(times, lambda t: minimum_snap(points, t).info["cost"],
-                               settings.time_weight)
 
     def fly(waypoints: FloatArray, segment_times: FloatArray) -> Trajectory:
         if free_world is None:
@@ -227,13 +218,28 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
         return refine_until_free(free_world, waypoints, segment_times, build,
                                  max_rounds=settings.max_rounds, spacing=settings.spacing)
 
-    trajectory = fly(points, times)
+    trajectory = fly(points, _segment_times(points, settings, build, fastest))
     if fastest:
         return stretch_where_fast(trajectory, fly, v, a, settings.vehicle)
     stretch = slow_down_factor(trajectory, v, a)
     if stretch > 1.0:
         trajectory = fly(trajectory.waypoints, stretch * trajectory.segment_times)
     return trajectory.replace(info={**trajectory.info, "time_stretch": stretch})
+
+
+def _segment_times(points: FloatArray, settings: TrajectorySettings, build: Generator,
+                   fastest: bool) -> FloatArray:
+    """Segment times (N - 1,), s, for ``points`` (N, 3) by the timing of ``settings``
+    (``fastest`` says whether that is the near time-optimal one)."""
+    if settings.method == "quintic-average":
+        return average_times(points, settings.v_max)
+    times = trapezoidal_times(points, settings.v_max, settings.a_max)
+    if fastest:
+        return fastest_times(points, times, build, settings.v_max, settings.a_max)
+    if settings.timing == "snap-time":
+        return optimize_times(times, lambda t: minimum_snap(points, t).info["cost"],
+                              settings.time_weight)
+    return times
 
 
 def concatenate(pieces: list[Trajectory], method: str, info: dict) -> Trajectory:
