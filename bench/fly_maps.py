@@ -27,7 +27,7 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.retime import rest_to_rest_duration
+from quadnav.trajectory.timing import rest_to_rest_duration
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ def fly(query: tuple, v: float, seed: int) -> Outcome:
     length, _, _ = peaks(t, trajectory.velocity(t), trajectory.acceleration(t))
     return Outcome(name, v, seed, mission.success, bool(metrics["collision"]),
                    mission.flight.rms_tracking_error,
-                   trajectory.duration / rest_to_rest_duration(length, v, ACCELERATION),
+                   trajectory.duration / float(rest_to_rest_duration(length, v, ACCELERATION)),
                    length / trajectory.duration, metrics["trajectory_margin_m"] / margin,
                    metrics["flight_margin_m"] / margin)
 

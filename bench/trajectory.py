@@ -55,8 +55,8 @@ from quadnav.planning import make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import distinct
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
-from quadnav.trajectory.retime import rest_to_rest_duration
 from quadnav.trajectory.space import SafeSpace, trajectory_margins
+from quadnav.trajectory.timing import rest_to_rest_duration
 from quadnav.world import World, load_world
 from quadnav.world.builtin import world_names
 from quadnav.world.margins import point_margins
@@ -116,7 +116,7 @@ class Figures:
         """Duration over the rest-to-rest bound along the curve, ``L / v + v / a``."""
         if math.isnan(self.length):
             return math.nan
-        return self.duration / rest_to_rest_duration(self.length, self.v, ACCELERATION)
+        return self.duration / float(rest_to_rest_duration(self.length, self.v, ACCELERATION))
 
     @property
     def mean_speed(self) -> float:

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from quadnav.trajectory.feasibility import Limits, quantities
 from quadnav.trajectory.model import FloatArray, Trajectory
 from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
+from quadnav.trajectory.timing import rest_to_rest_distance, rest_to_rest_duration
 
 #: ``build(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
 Build = Callable[[FloatArray, FloatArray], Trajectory]
@@ -61,28 +62,6 @@ LOCAL_STRETCH_ROUNDS = 8
 STRETCH_ALLOWANCE = 1e-2
 
 
-def rest_to_rest_distance(length: float, v_max: float, a_max: float, t: FloatArray
-                          ) -> FloatArray:
-    """Distance (K,), m, covered at times ``t`` (K,) s by the fastest rest-to-rest move
-    over ``length`` m with speed at most ``v_max`` m/s and acceleration ``a_max`` m/s^2
-    (trapezoidal, or triangular when it never reaches ``v_max``); ``t`` within its
-    duration ``rest_to_rest_duration``."""
-    top = min(v_max, math.sqrt(a_max * length))
-    ramp = top / a_max
-    duration = length / top + ramp
-    return np.where(t < ramp, 0.5 * a_max * t**2,
-                    np.where(t > duration - ramp, length - 0.5 * a_max * (duration - t)**2,
-                             0.5 * a_max * ramp**2 + top * (t - ramp)))
-
-
-def rest_to_rest_duration(length: float, v_max: float, a_max: float) -> float:
-    """Duration, s, of the fastest rest-to-rest move over ``length`` m with speed at most
-    ``v_max`` m/s and acceleration at most ``a_max`` m/s^2: ``L / v + v / a`` when it
-    reaches ``v``, else ``2 sqrt(L / a)``."""
-    top = min(v_max, math.sqrt(a_max * length))
-    return length / top + top / a_max
-
-
 def knots(points: FloatArray, v_max: float, a_max: float,
           interval: float = KNOT_INTERVAL) -> FloatArray:
     """The path ``points`` (N, 3) with points added on its segments (M, 3), M >= N.
@@ -95,7 +74,7 @@ def knots(points: FloatArray, v_max: float, a_max: float,
     cumulative = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0),
                                                                  axis=1))])
     length = float(cumulative[-1])
-    duration = rest_to_rest_duration(length, v_max, a_max)
+    duration = float(rest_to_rest_duration(length, v_max, a_max))
     count = max(1, math.ceil(duration / interval))
     times = np.linspace(0.0, duration, count + 1)[1:-1]
     clock = np.linspace(0.0, duration, _CLOCK_SAMPLES)

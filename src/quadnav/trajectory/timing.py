@@ -1,6 +1,7 @@
 """Segment times: a trapezoidal speed profile per segment, and optimising times for a cost.
 
 :func:`trapezoidal_times` gives each segment the time a rest-to-rest move along it takes
+(:func:`rest_to_rest_duration`; :func:`rest_to_rest_distance` is where that move is)
 with a speed and an acceleration limit; :func:`optimize_times` re-allocates the times to
 minimise a trajectory cost (e.g. the snap cost) plus a weight times the total time.
 """
@@ -67,10 +68,31 @@ def trapezoidal_times(waypoints: ArrayLike, v_max: float = DEFAULT_V_MAX,
     v = _positive(v_max, "v_max (m/s)")
     a = _positive(a_max, "a_max (m/s^2)")
     factor = _positive(scale, "time scale")
-    lengths = segment_lengths(waypoints)
-    reaches_cruise = lengths >= v * v / a
-    times = np.where(reaches_cruise, lengths / v + v / a, 2.0 * np.sqrt(lengths / a))
-    return factor * times
+    return factor * rest_to_rest_duration(segment_lengths(waypoints), v, a)
+
+
+def rest_to_rest_duration(length: ArrayLike, v_max: float, a_max: float) -> FloatArray:
+    """Durations, s, of the fastest rest-to-rest moves over ``length`` m (a number or an
+    array, elementwise) with speed at most ``v_max`` m/s and acceleration at most
+    ``a_max`` m/s^2: ``L / v + v / a`` when it reaches ``v`` (``L >= v^2 / a``,
+    trapezoidal), else ``2 sqrt(L / a)`` (triangular)."""
+    lengths = np.asarray(length, dtype=np.float64)
+    reaches_cruise = lengths >= v_max * v_max / a_max
+    return np.where(reaches_cruise, lengths / v_max + v_max / a_max,
+                    2.0 * np.sqrt(lengths / a_max))
+
+
+def rest_to_rest_distance(length: float, v_max: float, a_max: float, t: FloatArray
+                          ) -> FloatArray:
+    """Distance (K,), m, covered at times ``t`` (K,) s, within its duration
+    (:func:`rest_to_rest_duration`), by the fastest rest-to-rest move over ``length`` m
+    with speed at most ``v_max`` m/s and acceleration ``a_max`` m/s^2."""
+    top = min(v_max, math.sqrt(a_max * length))
+    ramp = top / a_max
+    duration = float(rest_to_rest_duration(length, v_max, a_max))
+    return np.where(t < ramp, 0.5 * a_max * t**2,
+                    np.where(t > duration - ramp, length - 0.5 * a_max * (duration - t)**2,
+                             0.5 * a_max * ramp**2 + top * (t - ramp)))
 
 
 def average_times(waypoints: ArrayLike, speed: float) -> FloatArray:
