@@ -94,12 +94,19 @@ def knots(points: FloatArray, v_max: float, a_max: float,
     return np.where(is_vertex[:, None], points[np.minimum(order, len(points) - 1)], inserted)
 
 
-def _curve_samples(trajectory: Trajectory) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Sample times (K,) s, with every break at index ``SAMPLES_PER_SEGMENT * i``, the
-    arc length there (K,) m and the curvature (K,) 1/m (0 where the trajectory stops)."""
+def _sample_times(trajectory: Trajectory) -> FloatArray:
+    """Times (K,) s, :data:`SAMPLES_PER_SEGMENT` evenly spread over each segment, with
+    every break at index ``SAMPLES_PER_SEGMENT * i``."""
     breaks = trajectory.breaks
     local = np.arange(SAMPLES_PER_SEGMENT) / SAMPLES_PER_SEGMENT
-    t = np.append((breaks[:-1, None] + np.diff(breaks)[:, None] * local).ravel(), breaks[-1])
+    return np.append((breaks[:-1, None] + np.diff(breaks)[:, None] * local).ravel(),
+                     breaks[-1])
+
+
+def _curve_samples(trajectory: Trajectory) -> tuple[FloatArray, FloatArray]:
+    """The arc length (K,) m and the curvature (K,) 1/m (0 where the trajectory stops)
+    at :func:`_sample_times`."""
+    t = _sample_times(trajectory)
     positions = trajectory.position(t)
     velocity = trajectory.velocity(t)
     speed = np.linalg.norm(velocity, axis=1)
@@ -110,14 +117,14 @@ def _curve_samples(trajectory: Trajectory) -> tuple[FloatArray, FloatArray, Floa
     steps = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     # A step the curve barely moves along still needs a little length (and time).
     arc = np.concatenate([[0.0], np.cumsum(np.maximum(steps, 1e-9))])
-    return t, arc, curvature
+    return arc, curvature
 
 
 def profile_times(trajectory: Trajectory, v_max: float, a_max: float) -> FloatArray:
     """Segment times (S,), s: how long the fastest flight along ``trajectory``'s curve,
     within ``v_max`` m/s and ``a_max`` m/s^2, from rest to rest, takes over each of its
     segments — shortened where a segment's curve is longer than its chord."""
-    _, arc, curvature = _curve_samples(trajectory)
+    arc, curvature = _curve_samples(trajectory)
     passing = travel_times(arc, fastest_speeds(arc, curvature, v_max, a_max,
                                                a_max / RAMP_TIME))
     # A segment whose curve is longer than its chord (a wiggle) is not given the time to
@@ -144,7 +151,7 @@ def segment_excess(trajectory: Trajectory, v_max: float, a_max: float,
     peak speed within ``v_max`` m/s, acceleration within ``a_max`` m/s^2 and, given
     ``vehicle``, roll/pitch rate within its ``body_rate_max`` (stretching by k divides
     speeds by k, accelerations by k^2 and, about, the rate by k^3); <= 1 where within."""
-    t, _, _ = _curve_samples(trajectory)
+    t = _sample_times(trajectory)
     velocity, acceleration = trajectory.velocity(t), trajectory.acceleration(t)
     excess = np.maximum(np.linalg.norm(velocity, axis=1) / v_max,
                         np.sqrt(np.linalg.norm(acceleration, axis=1) / a_max))
