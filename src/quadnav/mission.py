@@ -67,8 +67,8 @@ class MissionSettings:
         trajectory: generator and limits (``v_max`` is the top speed).
         fastest: ignore the trajectory's speed and acceleration limits and fly as fast as
             the vehicle can follow on the path: its own limits
-            (:func:`~quadnav.sim.envelope.vehicle_limits`), then uniformly slower until
-            every limit holds (``--speed max``).
+            (:func:`~quadnav.sim.envelope.vehicle_limits`), lowered until every limit
+            holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor.
         gains: the controller.
         sim: rates, stopping and success rules, disturbances, seed.

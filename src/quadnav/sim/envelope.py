@@ -3,8 +3,8 @@
 The vehicle's rotors and the controller's saturations bound what a trajectory may ask:
 the collective thrust (within the rotors' range, as the controller clips it), the tilt,
 the roll and pitch rates and the (horizontal) speed. A trajectory may use :data:`HEADROOM` of each,
-so the feedback that corrects tracking errors keeps the rest. :func:`check_flyable`
-(:func:`flyable_trajectory`) makes the trajectory, and refuses one that asks for more with
+so the feedback that corrects tracking errors keeps the rest. :func:`flyable_trajectory`
+makes the trajectory, and refuses one that asks for more with
 the limit it breaks and the fastest ``--speed``/``--accel`` that flies the same path
 within every limit — or, for ``--speed max``, flies that one.
 """
@@ -20,6 +20,7 @@ from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED
 from quadnav.trajectory.feasibility import (
     GRAVITY,
+    FeasibilityReport,
     Limits,
     feasibility,
     slowest_feasible_scale,
@@ -73,7 +74,7 @@ def flyable_trajectory(path: FloatArray, settings: TrajectorySettings, space: Sa
     report = feasibility(trajectory, None, limits)
     if report.ok:
         return trajectory, chosen
-    slower = _slowed(path, chosen, space, trajectory, limits)
+    slower = _slowed(path, chosen, space, trajectory, report, limits)
     if slower is not None and fastest:
         return slower
     advice = ("no slower flight of it would either" if slower is None else
@@ -85,22 +86,24 @@ def flyable_trajectory(path: FloatArray, settings: TrajectorySettings, space: Sa
 
 
 def _slowed(path: FloatArray, settings: TrajectorySettings, space: SafeSpace,
-            trajectory: Trajectory, limits: Limits
+            trajectory: Trajectory, report: FeasibilityReport, limits: Limits
             ) -> tuple[Trajectory, TrajectorySettings] | None:
     """A slower trajectory through ``path`` within ``limits`` and its settings: the
     acceleration limit (and the top speed too, if the speed is what breaks a limit)
-    lowered by the factor that would slow ``trajectory`` into the limits, for up to
-    :data:`SLOWING_ROUNDS` rounds; None if none is within."""
+    lowered by the factor that would slow ``trajectory`` (whose feasibility is
+    ``report``) into the limits, for up to :data:`SLOWING_ROUNDS` rounds; None if none
+    is within."""
     for _ in range(SLOWING_ROUNDS):
         scale = slowest_feasible_scale(trajectory, limits)
         if scale is None:
             return None
-        too_fast = feasibility(trajectory, None, limits).max_speed.value > limits.v_max
+        too_fast = report.max_speed.value > limits.v_max
         settings = settings.replace(
             v_max=_down(settings.v_max / scale) if too_fast else settings.v_max,
             a_max=_down(settings.a_max / scale**2))
         trajectory = make_trajectory(path, settings, space)
-        if feasibility(trajectory, None, limits).ok:
+        report = feasibility(trajectory, None, limits)
+        if report.ok:
             return trajectory, settings
     return None
 

@@ -1,10 +1,15 @@
 """From waypoints to a trajectory: pick a generator, allocate segment times, keep it free.
 
-:func:`make_trajectory` is the stage's one entry point: segment times from a trapezoidal
-speed profile (optionally optimised for total time plus snap), the chosen generator, safe
-corridors for the constrained minimum-snap QP, and — given a :class:`SafeSpace` —
-straight legs out of the margin and collision-aware refinement of the rest, which adds
-waypoints until a dense exact check finds it clear of the margin.
+:func:`make_trajectory` is the stage's one entry point: the chosen generator, segment
+times by the chosen timing (by default the near time-optimal one of
+:mod:`quadnav.trajectory.retime`: cruise at the top speed, slow only for turns and the
+ends), safe corridors for the constrained minimum-snap QP, and — given a
+:class:`SafeSpace` — straight legs out of the margin and collision-aware refinement of the
+rest, which adds waypoints until a dense exact check finds it clear of the margin.
+
+What the limits mean, for every method and timing: the speed (size of the velocity) never
+exceeds ``v_max`` and the size of the acceleration vector never exceeds ``a_max`` — one
+budget for speeding up, braking and turning — on dense samples of the trajectory.
 """
 
 from __future__ import annotations
@@ -155,7 +160,8 @@ def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = 
         settings: method, limits and options (defaults: minimum snap, Tello-class limits).
         space: the map and the margin to keep. When given, the path's legs out of the
             margin (see :class:`SafeSpace`) are flown straight, each segment from rest to
-            rest at :data:`LEG_SLOW_DOWN` of the limits, so they stay exactly on the path;
+            rest at :data:`LEG_SLOW_DOWN` of the limits (:func:`leg_pieces`), so they stay
+            exactly on the path;
             the rest is one smooth piece to which
             waypoints are added until a dense exact check finds it free in the inflated
             map (see :func:`quadnav.trajectory.collision.refine_until_free`), and
@@ -186,9 +192,10 @@ def leg_pieces(leg: FloatArray, settings: TrajectorySettings) -> list[Trajectory
 
 def join_legs(first: list[Trajectory], main: list[Trajectory], last: list[Trajectory],
               settings: TrajectorySettings) -> Trajectory:
-    """One trajectory flying the start leg's pieces ``first`` (each one segment, see
+    """One trajectory flying the start leg's pieces ``first`` (one per leg segment, see
     :func:`leg_pieces`), then ``main`` (at most one piece), then the goal leg's ``last``,
-    with the main piece's solver facts and the yaw of ``settings``."""
+    with the main piece's solver facts and the yaw of ``settings``; ``leg_segments``
+    counts the legs' segments."""
     pieces = [*first, *main, *last]
     joined = concatenate(pieces, settings.method, (main or pieces)[0].info)
     return joined.replace(yaw_mode=settings.yaw, leg_segments=(_segments(first),
