@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
@@ -23,7 +22,6 @@ from quadnav.limits import (
     Range,
 )
 from quadnav.planning import PlannerSettings, planner_names
-from quadnav.runfolder import check_output_folder
 from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
@@ -68,6 +66,9 @@ samples = number_in(SAMPLES)
 plan_time = number_in(PLAN_TIME)
 length = number_in(LENGTH)
 speed = number_in(SPEED)
+acceleration = number_in(ACCELERATION)
+heading_degrees = number_in(HEADING_DEGREES)
+time_scale = number_in(TIME_SCALE)
 
 
 def speed_or_max(text: str) -> float | None:
@@ -82,11 +83,6 @@ def speed_or_max(text: str) -> float | None:
                                          f"{text[:40]!r}") from None
 
 
-acceleration = number_in(ACCELERATION)
-heading_degrees = number_in(HEADING_DEGREES)
-time_scale = number_in(TIME_SCALE)
-
-
 def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
     """--method and --timing: the trajectory's shape and how its segments are timed."""
     parser.add_argument("--method", choices=METHODS, default="minsnap",
@@ -99,13 +95,6 @@ def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
                              "turns and the ends; rest-to-rest gives each segment a "
                              "stop-and-go move; snap-time trades snap for time (minsnap) "
                              "(default: fastest)")
-
-
-def output_folder(path: str) -> Path:
-    """The output folder ``path``, checked before any work: QuadnavError (one line) if a
-    file is in the way or the folder cannot be written or created
-    (:func:`~quadnav.runfolder.check_output_folder`)."""
-    return check_output_folder(path)
 
 
 def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:

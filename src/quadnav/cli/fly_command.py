@@ -13,7 +13,6 @@ from quadnav.cli.args import (
     add_start_goal_arguments,
     add_timing_arguments,
     number_in,
-    output_folder,
     planner_budget,
     resolve_margin,
     resolve_start_goal,
@@ -33,6 +32,7 @@ from quadnav.mission import (
 )
 from quadnav.planning import get_planner, make_problem
 from quadnav.report.rundir import FIGURES, REPORT, write_run
+from quadnav.runfolder import check_output_folder
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
@@ -62,7 +62,7 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
 def fly(args: argparse.Namespace) -> int:
     """Run the mission, write the outputs; exit 1 unless it reached the goal cleanly."""
     get_planner(args.planner)
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     settings = mission_settings(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)

@@ -43,7 +43,6 @@ from quadnav.cli.args import (
     length,
     margin_value,
     number_in,
-    output_folder,
     plan_time,
     resolve_margin,
     seed_value,
@@ -70,7 +69,7 @@ from quadnav.limits import (
     MARGIN,
     PLAN_TIME,
 )
-from quadnav.runfolder import replaced_folder
+from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.world import load_world
 
 if TYPE_CHECKING:
@@ -235,7 +234,7 @@ def diffdrive(args: argparse.Namespace) -> int:
     )
 
     HEADING_RADIANS.check(args.start[2], "argument --start: THETA")
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     settings = settings_from(args)
     world, height = slice_for(args.map, args.height)
     model = DiffDrive()
@@ -321,7 +320,7 @@ def quadrotor(args: argparse.Namespace) -> int:
     reached."""
     from quadnav.viz.kino3d import quadrotor_controls_figure, quadrotor_figure
 
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     settings = settings_from(args)
     world = load_world(args.map)
     ends = []

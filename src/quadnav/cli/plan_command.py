@@ -12,7 +12,6 @@ from quadnav.cli.args import (
     add_planner_arguments,
     add_start_goal_arguments,
     length,
-    output_folder,
     planner_budget,
     probability,
     resolve_margin,
@@ -25,7 +24,7 @@ from quadnav.planning import plan as run_planner
 from quadnav.planning.refine import refine
 from quadnav.planning.report import path_csv, plan_summary
 from quadnav.planning.settings import DEFAULT_TIME_LIMIT
-from quadnav.runfolder import replaced_folder
+from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.world import load_world
 
 #: Exit code when the search ends without a path (the input itself was fine).
@@ -47,7 +46,7 @@ def plan(args: argparse.Namespace) -> int:
     from quadnav.viz.plan_figure import plan_figure
 
     get_planner(args.planner)
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     settings = settings_from(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)

@@ -23,7 +23,6 @@ from quadnav.cli.args import (
     add_start_goal_arguments,
     heading_degrees,
     number_in,
-    output_folder,
     planner_budget,
     resolve_margin,
     resolve_start_goal,
@@ -46,7 +45,7 @@ from quadnav.hardware.tello_log import LOG_NAME
 from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
 from quadnav.planning import get_planner
-from quadnav.runfolder import replaced_folder
+from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
@@ -100,7 +99,7 @@ def tello_fly(args: argparse.Namespace) -> int:
     get_planner(args.planner)
     settings = BridgeSettings(mode=args.mode, min_battery=args.min_battery,
                               time_scale=args.time_scale)
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)
     try:

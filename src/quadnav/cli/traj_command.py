@@ -5,15 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 
-import numpy as np
-
 from quadnav.cli.args import (
     acceleration,
     add_map_argument,
     add_margin_argument,
     add_timing_arguments,
     number_in,
-    output_folder,
     resolve_margin,
     speed,
 )
@@ -26,7 +23,8 @@ from quadnav.limits import (
     check_count,
     check_duration,
 )
-from quadnav.runfolder import replaced_folder
+from quadnav.planning.result import path_length
+from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.trajectory.export import mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import Limits, feasibility
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
@@ -47,13 +45,13 @@ def traj(args: argparse.Namespace) -> int:
     from quadnav.viz.figures import save_figure
     from quadnav.viz.trajectory_figures import states_figure, trajectory_3d_figure
 
-    folder = output_folder(args.output)
+    folder = check_output_folder(args.output)
     settings = TrajectorySettings(method=args.method, v_max=args.speed, a_max=args.accel,
                                   timing=args.timing, corridor=args.corridor,
                                   yaw=YawMode(args.yaw))
     world = load_world(args.map)
     path = read_path_csv(args.path)
-    shortest = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) / args.speed
+    shortest = path_length(path) / args.speed
     check_duration(shortest, "raise --speed", at_least=True)
     check_count(shortest / args.dt + 1, MAX_SAMPLES, f"a trajectory of at least "
                 f"{shortest:.6g} s sampled every {args.dt:g} s gives samples",
