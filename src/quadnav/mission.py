@@ -34,7 +34,7 @@ from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
-from quadnav.world.margins import box_margins
+from quadnav.world.margins import segment_box_margins
 from quadnav.world.model import World
 
 #: Cruise speed of a mission, m/s, and its acceleration limit, m/s^2: the trajectory
@@ -194,10 +194,7 @@ def track_margins(t: FloatArray, positions: FloatArray, world: World,
 
     The track is times ``t`` (N,) s and positions (N, 3) m; between two samples it is
     taken as straight, and each such piece is measured by its bounding box."""
-    pieces = np.stack([positions[:-1], positions[1:]], axis=1)
-    margins = box_margins(world, np.concatenate([pieces.min(axis=1), pieces.max(axis=1)],
-                                                axis=1))
-    return windowed_margins(t, margins, window)
+    return windowed_margins(t, segment_box_margins(world, positions), window)
 
 
 def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:

@@ -67,6 +67,16 @@ def point_margins(world: World, points: ArrayLike, boundary: bool = True) -> Flo
     return box_margins(world, np.concatenate([p, p], axis=1), boundary)
 
 
+def segment_box_margins(world: World, points: ArrayLike, boundary: bool = True
+                        ) -> FloatArray:
+    """The margin (N - 1,), metres, of the bounding box of each straight segment between
+    consecutive ``points`` (N, 3), N >= 2: a lower bound on the segment's own margin (see
+    :func:`box_margins`)."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    return box_margins(world, np.concatenate([np.minimum(p[:-1], p[1:]),
+                                              np.maximum(p[:-1], p[1:])], axis=1), boundary)
+
+
 def polyline_margin(world: World, points: ArrayLike, boundary: bool = True) -> float:
     """The smallest margin, metres, along the straight segments through ``points`` (N, 3),
     N >= 1: each segment is measured exactly, to 1e-9 m.
@@ -81,9 +91,7 @@ def polyline_margin(world: World, points: ArrayLike, boundary: bool = True) -> f
     if len(p) == 1:
         return vertices
     segments = np.stack([p[:-1], p[1:]], axis=1)
-    low = float(box_margins(world, np.concatenate([segments.min(axis=1),
-                                                   segments.max(axis=1)], axis=1),
-                            boundary).min())
+    low = float(segment_box_margins(world, p, boundary).min())
     if low >= vertices:
         return vertices
     if not boundary:
