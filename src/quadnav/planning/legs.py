@@ -63,10 +63,8 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     it is free already. QuadnavError when no way out is found."""
     if free_world.is_free(point):
         return point[None].copy()
-    clearance = min((1.0 - LEG_CLEARANCE_SLIVER) * margin, own_clearance(world, point))
-    grow = np.repeat([-clearance, clearance], 3)
-    legs = world.replace(blocks=world.blocks + grow, boundary=world.boundary
-                         + np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3))
+    legs = leg_world(world, min((1.0 - LEG_CLEARANCE_SLIVER) * margin,
+                                own_clearance(world, point)))
     for push in (LEG_END_DEPTH * margin, LEG_END_CLEARANCE):
         exits = [c for c in _projections(free_world, point, push)
                  if legs.segment_free(point, c)]
@@ -76,6 +74,14 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     leg = _search_around(legs, free_world, point, margin, label)
     deeper = free_world.inflate(0.5 * LEG_END_DEPTH * margin)  # the leg ends deeper still
     return _end_at_margin(deeper if deeper.is_free(leg[-1]) else free_world, leg)
+
+
+def leg_world(world: World, clearance: float = 0.0) -> World:
+    """Where a leg may go: ``world`` with every block grown by ``clearance`` metres per
+    axis and the boundary widened by :data:`BOUNDARY_SLACK`, so a point on it is free."""
+    slack = np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3)
+    return world.replace(blocks=world.blocks + np.repeat([-clearance, clearance], 3),
+                         boundary=world.boundary + slack)
 
 
 def own_clearance(world: World, point: FloatArray) -> float:

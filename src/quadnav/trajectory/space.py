@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, PPoly
 
 from quadnav.errors import QuadnavError
-from quadnav.planning.legs import BOUNDARY_SLACK
+from quadnav.planning.legs import leg_world
 from quadnav.trajectory.collision import check_samples
 from quadnav.trajectory.model import FloatArray, Trajectory
 from quadnav.world.margins import box_margins, rounded
@@ -54,8 +54,7 @@ class SafeSpace:
     @cached_property
     def legs_world(self) -> World:
         """Where legs may go: off every real block, inside the closed boundary."""
-        return self.world.replace(boundary=self.world.boundary
-                                  + np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3))
+        return leg_world(self.world)
 
     def split(self, waypoints: ArrayLike) -> tuple[int, int]:
         """``(head, tail)``: ``waypoints[:head + 1]`` is the start leg and
