@@ -243,8 +243,8 @@ class EmulatedDrone:
             is the plane at its height.
         yaw: world heading of the nose at power-on, rad counter-clockwise from +x.
         battery: battery at power-on, percent.
-        battery_drain: how many times faster than :data:`DRAIN_FLYING` and
-            :data:`DRAIN_IDLE` the battery drains (an aged battery: > 1).
+        battery_drain: how many times faster than :data:`DRAIN_FLYING` the battery
+            drains in flight (an aged battery: > 1; idle, it drains at :data:`DRAIN_IDLE`).
         params: the vehicle (default: the ``tello`` preset).
         gains: the cascade (default: :class:`~quadnav.control.gains.Gains`).
         settings: the simulator's rates (default: :class:`~quadnav.sim.SimSettings`).
@@ -389,8 +389,8 @@ class EmulatedDrone:
         self.time += elapsed
         if self.flying:
             self.motor_time += elapsed
-        self.battery = max(0.0, self.battery - elapsed * self.battery_drain * (
-            DRAIN_FLYING if self.flying else DRAIN_IDLE))
+        self.battery = max(0.0, self.battery - elapsed * (
+            self.battery_drain * DRAIN_FLYING if self.flying else DRAIN_IDLE))
         return self._check_motion_end()
 
     def track(self) -> tuple[FloatArray, FloatArray]:

@@ -105,8 +105,9 @@ class Faults:
             command it heard.
         battery: battery at power-on, percent (below
             :data:`~quadnav.hardware.sdk.LOW_BATTERY`: too low to fly).
-        battery_drain: how many times faster than a new battery it drains (>= 1; an
-            aged battery's charge falls faster in flight, and the drone lands by itself
+        battery_drain: how many times faster than a new battery it drains in flight
+            (>= 1; an aged battery's charge falls faster under load; idle, it drains as a
+            new one, and the drone lands by itself
             once it reports less than :data:`~quadnav.hardware.sdk.LOW_BATTERY` percent).
     """
 
