@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadnav.control.gains import Gains, Limits, gain_preset_names, load_gains
+from quadnav.control.gains import (
+    Gains,
+    Limits,
+    course_gain_names,
+    gain_preset_names,
+    load_gains,
+)
 from quadnav.errors import QuadnavError
 from quadnav.sim.flight import Ending
 from quadnav.sim.settings import SimSettings
@@ -124,3 +130,20 @@ def test_vehicle_presets_name_their_gain_sets():
     assert load_gains(preset="rbe595").rate.kp[0] < Gains().rate.kp[0]
     with pytest.raises(QuadnavError, match="unknown gain set"):
         load_gains(preset="nope")
+
+
+def test_course_gain_tables_set_the_18_outer_gains_on_the_vehicles_own():
+    names = course_gain_names()
+    assert "p2a-starter" in names and len(names) >= 6
+    for preset in ("tello", "rbe595"):
+        own = load_gains(preset=preset)
+        for name in names:
+            table = load_gains(name, preset)
+            assert np.array_equal(table.rate.kp, own.rate.kp)  # inner loops kept
+            assert np.array_equal(table.attitude_kp, own.attitude_kp)
+            assert not np.array_equal(table.velocity.kp, own.velocity.kp)
+    starter = load_gains("p2a-starter")
+    assert starter.position.kp.tolist() == [20.0, 20.0, 0.1]
+    assert starter.velocity.kd.tolist() == [5.0, 5.0, 0.5534]
+    with pytest.raises(QuadnavError, match="p2a-nope"):
+        load_gains("p2a-nope")

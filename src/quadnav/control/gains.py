@@ -135,24 +135,41 @@ class Gains:
 def gain_preset_names() -> list[str]:
     """Names of the shipped gain sets: ``tello`` (the defaults) and one per vehicle preset
     that needs its own."""
-    return sorted(["tello"] + [p.name.removesuffix(".toml") for p in _presets().iterdir()
-                               if p.name.endswith(".toml")])
+    return sorted(["tello", *_toml_names(_shipped() / "presets")])
 
 
-def _presets():
-    return resources.files("quadnav.control") / "presets"
+def course_gain_names() -> list[str]:
+    """Names of the shipped course gain tables (``p2a-starter``, ``p2a-ankx22``, ...): the
+    18 position and velocity gains of the WPI RBE595 starter and of published student teams,
+    each file stating its source; usable wherever a gains file is (``--gains NAME``)."""
+    return sorted(_toml_names(_shipped() / "course"))
+
+
+def _shipped():
+    return resources.files("quadnav.control")
+
+
+def _toml_names(folder) -> list[str]:
+    return [p.name.removesuffix(".toml") for p in folder.iterdir() if p.name.endswith(".toml")]
+
+
+def _set_from(gains: Gains, file, where: str) -> Gains:
+    with resources.as_file(file) as real:
+        return from_table(gains, read_toml(real), where)
 
 
 def load_gains(path: str | Path | None = None, preset: str = "tello") -> Gains:
-    """The gain set ``preset`` (see :func:`gain_preset_names`), with the keys of the TOML
-    file at ``path`` (if any) set on top."""
+    """The gain set ``preset`` (see :func:`gain_preset_names`), with the keys of ``path``
+    (if any) set on top: a course gain table's name (:func:`course_gain_names`) or a TOML
+    file."""
     if preset not in gain_preset_names():
         raise QuadnavError(f"unknown gain set {preset!r}; expected one of "
                            f"{', '.join(gain_preset_names())}")
     gains = Gains()
     if preset != "tello":
-        with resources.as_file(_presets() / f"{preset}.toml") as real:
-            gains = from_table(gains, read_toml(real), f"gain set {preset}")
+        gains = _set_from(gains, _shipped() / "presets" / f"{preset}.toml", f"gain set {preset}")
     if path is None:
         return gains
+    if str(path) in course_gain_names():
+        return _set_from(gains, _shipped() / "course" / f"{path}.toml", f"gain table {path}")
     return from_table(gains, read_toml(path), str(path))
