@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from quadnav.errors import MapError
+from quadnav.specs import ParamInfo, SpecError, describe_params, format_values, parse_values
 from quadnav.world.builtin import empty, forest, maze, window
 from quadnav.world.builtin.base import Generator, Layout
-from quadnav.world.builtin.params import SpecError, format_values, parse_values
 from quadnav.world.connectivity import connected, default_resolution
 from quadnav.world.model import World
 
@@ -51,26 +51,6 @@ _GENERATORS: dict[str, Generator] = {
 
 
 @dataclass(frozen=True)
-class ParamInfo:
-    """A parameter as ``quadnav worlds`` shows it; every field is display text.
-
-    Attributes:
-        name: the key in a spec, e.g. ``size``.
-        type: ``int``, ``float``, ``WxDxH`` or ``NxM``.
-        default: the default as written in a spec, e.g. ``20x20x6``.
-        help: one line, with units.
-        range: the values accepted (for each part of a size or grid), e.g.
-            ``from 2 to 10,000 m``.
-    """
-
-    name: str
-    type: str
-    default: str
-    help: str
-    range: str
-
-
-@dataclass(frozen=True)
 class WorldInfo:
     """A built-in world as ``quadnav worlds`` shows it.
 
@@ -93,11 +73,7 @@ def world_names() -> list[str]:
 def describe_worlds() -> list[WorldInfo]:
     """Every built-in world with a summary and its parameters."""
     return [
-        WorldInfo(g.name, g.summary, tuple(
-            ParamInfo(p.name, p.kind.label, p.format(p.default), p.help,
-                      ("each " if p.kind.parts > 1 else "") + p.range.describe())
-            for p in g.params))
-        for g in _GENERATORS.values()
+        WorldInfo(g.name, g.summary, describe_params(g.params)) for g in _GENERATORS.values()
     ]
 
 

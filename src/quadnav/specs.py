@@ -1,9 +1,13 @@
-"""Parameters of built-in worlds: declaring, parsing and formatting ``key=value`` lists.
+"""Specs such as ``forest:size=20x20x6,seed=3`` or ``helix:radius=1,laps=2``: declaring,
+parsing and formatting their ``key=value`` parameter lists.
 
-A value is an ``int``, a ``float``, a size ``WxDxH`` (three floats, metres) or a grid
-``NxM`` (two ints). A size or grid is a tuple; its range applies to every part. Every
-parameter has a stated range, checked before anything is built, so that no spec can
-ask for more than the machine has.
+Built-in worlds (:mod:`quadnav.world.builtin`) and built-in references
+(:mod:`quadnav.trajectory.references`) are both named by such a spec. A value is an
+``int``, a ``float``, a size ``WxDxH`` (three floats, metres), a grid ``NxM`` (two ints)
+or one of a few words (e.g. an axis ``x``, ``y`` or ``z``). A size or grid is a tuple;
+its range applies to every part. Every parameter has a stated range (or its list of
+words), checked before anything is built, so that no spec can ask for more than the
+machine has.
 """
 
 from __future__ import annotations
@@ -13,15 +17,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from quadnav.limits import COORDINATE, SEED, Range
+from quadnav.limits import SEED, Range
 
-Value = Any  # int | float | tuple[float, float, float] | tuple[int, int]
+Value = Any  # int | float | str | tuple[float, float, float] | tuple[int, int]
 
 
 class SpecError(Exception):
-    """A spec that names a world correctly but asks for something it cannot build.
+    """A spec that names a world or reference correctly but asks for something it cannot
+    build.
 
-    The registry turns it into a :class:`~quadnav.errors.MapError` naming the spec.
+    Each registry turns it into a :class:`~quadnav.errors.QuadnavError` naming the spec.
     """
 
 
@@ -30,34 +35,47 @@ class Kind:
     """How a parameter's value is written.
 
     Attributes:
-        label: how the type is shown to users: ``int``, ``float``, ``WxDxH`` or ``NxM``.
+        label: how the type is shown to users: ``int``, ``float``, ``WxDxH``, ``NxM`` or
+            the words allowed, e.g. ``x|y|z``.
         parts: numbers in the value (1 for a scalar), joined by ``x``.
         integer: whether the numbers are ints rather than floats.
+        choices: the words a value may be (lower case), for a word rather than numbers.
     """
 
     label: str
     parts: int = 1
     integer: bool = False
+    choices: tuple[str, ...] = ()
 
     def parse(self, text: str) -> Value:
         """The value written as ``text``; ValueError saying what was expected."""
+        if self.choices:
+            word = text.strip().lower()
+            if word not in self.choices:
+                raise ValueError(f"expected {self.expected()}, got {text!r}")
+            return word
         pieces = text.lower().split("x") if self.parts > 1 else [text]
         try:
             if len(pieces) != self.parts:
                 raise ValueError
             numbers = [int(p) if self.integer else float(p) for p in pieces]
         except ValueError:
-            raise ValueError(f"expected {self._expected()}, got {text!r}") from None
+            raise ValueError(f"expected {self.expected()}, got {text!r}") from None
         if not all(math.isfinite(n) for n in numbers):
-            raise ValueError(f"expected {self._expected()}, got {text!r}")
+            raise ValueError(f"expected {self.expected()}, got {text!r}")
         return numbers[0] if self.parts == 1 else tuple(numbers)
 
     def format(self, value: Value) -> str:
         """``value`` written so that :meth:`parse` reads it back exactly."""
+        if self.choices:
+            return str(value)
         numbers = value if self.parts > 1 else (value,)
         return "x".join(str(n) if self.integer else _format_float(n) for n in numbers)
 
-    def _expected(self) -> str:
+    def expected(self) -> str:
+        """What a value of this kind is, in words, e.g. ``a number`` or ``one of x, y, z``."""
+        if self.choices:
+            return "one of " + ", ".join(self.choices)
         number = "an integer" if self.integer else "a number"
         if self.parts == 1:
             return number
@@ -69,6 +87,8 @@ INT = Kind("int", integer=True)
 FLOAT = Kind("float")
 SIZE = Kind("WxDxH", parts=3)
 GRID = Kind("NxM", parts=2, integer=True)
+#: One of the world axes.
+AXIS = Kind("x|y|z", choices=("x", "y", "z"))
 
 
 def _format_float(number: float) -> str:
@@ -79,21 +99,26 @@ def _format_float(number: float) -> str:
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter of a built-in world.
+    """One parameter of a built-in world or reference.
 
     Attributes:
         name: the key in a spec.
         kind: how the value is written.
         default: value used when the spec leaves the key out.
-        help: one line for ``quadnav worlds``, with units.
-        range: the values every part may take.
+        help: one line for ``quadnav worlds`` or ``quadnav references``, with units.
+        range: the values every part may take (None for a word: its kind's choices).
     """
 
     name: str
     kind: Kind
     default: Value
     help: str
-    range: Range
+    range: Range | None = None
+
+    def __post_init__(self) -> None:
+        if (self.range is None) != bool(self.kind.choices):
+            raise ValueError(f"parameter {self.name!r}: a range is needed exactly when the "
+                             "value is numbers")
 
     def parse(self, text: str) -> Value:
         """The value written as ``text``, checked against the range; SpecError if bad."""
@@ -101,6 +126,8 @@ class Param:
             value = self.kind.parse(text)
         except ValueError as error:
             raise SpecError(f"{self.name}: {error}") from None
+        if self.range is None:
+            return value
         parts = value if self.kind.parts > 1 else (value,)
         if not all(part in self.range for part in parts):
             every = "every part " if self.kind.parts > 1 else ""
@@ -111,10 +138,39 @@ class Param:
         """``value`` as it would be written in a spec."""
         return self.kind.format(value)
 
+    def allowed(self) -> str:
+        """The values accepted, in words, e.g. ``from 0.01 to 1,000 m`` (for each part of
+        a size or grid: ``each from ...``) or ``one of x, y, z``."""
+        if self.range is None:
+            return self.kind.expected()
+        return ("each " if self.kind.parts > 1 else "") + self.range.describe()
 
-def sizes(least: float) -> Range:
-    """The range of a map's side: ``least`` to the coordinate range's 10 km, metres."""
-    return Range(least, COORDINATE.high, "m")
+
+@dataclass(frozen=True)
+class ParamInfo:
+    """A parameter as ``quadnav worlds`` and ``quadnav references`` show it; every field
+    is display text.
+
+    Attributes:
+        name: the key in a spec, e.g. ``size``.
+        type: ``int``, ``float``, ``WxDxH``, ``NxM`` or the words allowed (``x|y|z``).
+        default: the default as written in a spec, e.g. ``20x20x6``.
+        help: one line, with units.
+        range: the values accepted (for each part of a size or grid), e.g.
+            ``from 2 to 10,000 m``.
+    """
+
+    name: str
+    type: str
+    default: str
+    help: str
+    range: str
+
+
+def describe_params(params: Sequence[Param]) -> tuple[ParamInfo, ...]:
+    """``params`` as display text, in order."""
+    return tuple(ParamInfo(p.name, p.kind.label, p.format(p.default), p.help, p.allowed())
+                 for p in params)
 
 
 #: The ``seed`` parameter of the worlds that draw their layout at random.
