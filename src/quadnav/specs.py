@@ -167,6 +167,22 @@ class ParamInfo:
     range: str
 
 
+@dataclass(frozen=True)
+class SpecInfo:
+    """A built-in world or reference as ``quadnav worlds`` or ``quadnav references``
+    shows it.
+
+    Attributes:
+        name: its name, the part of a spec before ``:``.
+        summary: one line saying what it is.
+        params: its parameters, in canonical order.
+    """
+
+    name: str
+    summary: str
+    params: tuple[ParamInfo, ...]
+
+
 def describe_params(params: Sequence[Param]) -> tuple[ParamInfo, ...]:
     """``params`` as display text, in order."""
     return tuple(ParamInfo(p.name, p.kind.label, p.format(p.default), p.help, p.allowed())
@@ -203,3 +219,12 @@ def parse_values(params: Sequence[Param], text: str) -> dict[str, Value]:
 def format_values(params: Sequence[Param], values: dict[str, Value]) -> str:
     """``key=value,...`` for every parameter, in declaration order."""
     return ",".join(f"{p.name}={p.format(values[p.name])}" for p in params)
+
+
+def parse_spec(name: str, params: Sequence[Param], rest: str | None) -> tuple[str, dict]:
+    """The canonical spec (``name:`` and every parameter, :func:`format_values`) and the
+    values of a spec ``name[:rest]``: ``rest`` is the text after the ``:`` (None without
+    one: every default). SpecError as :func:`parse_values`."""
+    values = ({p.name: p.default for p in params} if rest is None
+              else parse_values(params, rest))
+    return f"{name}:{format_values(params, values)}", values

@@ -33,7 +33,7 @@ from quadnav.planning.result import tree_edges
 from quadnav.runfolder import replaced_folder
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
-from quadnav.trajectory.model import Samples
+from quadnav.trajectory.reference import Samples
 from quadnav.vehicle.params import FloatArray
 from quadnav.world import World, read_map
 from quadnav.world.mapfile import format_map
