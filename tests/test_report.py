@@ -149,7 +149,7 @@ def test_one_folder_reports_into_it_by_default(flown, tmp_path, capsys, monkeypa
 def test_a_bad_folder_is_one_line_exit_2_and_writes_nothing(flown, tmp_path):
     out = tmp_path / "all.html"
     assert_user_error(run("report", flown, tmp_path / "nowhere", "-o", out),
-                      "nowhere", "not a quadnav fly output folder")
+                      "nowhere", "not a quadnav fly or track output folder")
     assert not out.exists()
 
 

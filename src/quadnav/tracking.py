@@ -146,6 +146,19 @@ class Tracking:
         }
 
 
+def step_summary(metrics: dict) -> str:
+    """A step's response (:meth:`Tracking.step_metrics`, e.g. from metrics.json) in
+    words: size and axis, overshoot, rise and settling times, steady-state error."""
+    def seconds(value: float | None) -> str:
+        return "-" if value is None else f"{value:.2f} s"
+
+    return (f"step {metrics['step_size_m']:g} m along {metrics['step_axis']}: overshoot "
+            f"{metrics['overshoot_percent']:.2f} %, rise (10-90 %) "
+            f"{seconds(metrics['rise_time_s'])}, settling (2 %) "
+            f"{seconds(metrics['settling_time_s'])}, steady-state error "
+            f"{100 * metrics['steady_state_error_m']:.2f} cm")
+
+
 def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
                     gains: Gains | None = None, settings: SimSettings | None = None,
                     progress: Callable[[float], None] | None = None) -> Tracking:
