@@ -23,8 +23,8 @@ from quadnav.world import load_world
 SMALL = "forest:size=12x12x4,seed=2"
 IMAGE = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)" '
                    r'width="(\d+)" height="(\d+)"')
-#: Pixel sizes of the three figures (inches times 120 dpi).
-SIZES = [(1440, 840), (1320, 960), (1200, 480)]
+#: Pixel sizes of the four figures (inches times 120 dpi).
+SIZES = [(1440, 840), (1560, 960), (1200, 480), (1320, 1080)]
 
 
 @pytest.fixture(scope="module")
