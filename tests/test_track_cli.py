@@ -31,10 +31,9 @@ def _track(folder, *args: str, here: bool = True) -> dict:
 
 @pytest.fixture(scope="module")
 def step(tmp_path_factory):
-    """A 1 m step along x on the tello, with its figures and report (a new process, as a
-    user runs it)."""
+    """A 1 m step along x on the tello, with its figures and report."""
     folder = tmp_path_factory.mktemp("step")
-    return folder, _track(folder, "step", here=False)
+    return folder, _track(folder, "step")
 
 
 def test_hover_holds_still(tmp_path):
@@ -69,7 +68,7 @@ def test_a_step_settles_with_the_stated_metrics(step):
 
 
 def test_a_helix_is_tracked_within_centimetres(tmp_path):
-    metrics = _track(tmp_path, "helix", "--no-figures")
+    metrics = _track(tmp_path, "helix", "--no-figures", here=False)  # a new process, as a user
     assert metrics["success"] and metrics["reference_duration_s"] == pytest.approx(13.72, abs=0.01)
     assert metrics["rms_tracking_error_m"] < 0.02 and metrics["max_tracking_error_m"] < 0.05
     assert metrics["final_error_m"] < 0.005 and metrics["mixer_saturation"] == 0
@@ -130,7 +129,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
-def test_report_view_and_the_viewer_data_accept_a_track_folder(step, tmp_path):
+def test_report_view_and_animate_accept_a_track_folder(step, tmp_path):
     folder, _ = step
     run = read_run(folder)
     assert run.is_track and run.title.startswith("step:") and run.path is None
@@ -143,6 +142,10 @@ def test_report_view_and_the_viewer_data_accept_a_track_folder(step, tmp_path):
     result = run_here("view", folder, "-o", tmp_path / "view.html")
     assert result.returncode == 0, result.stderr
     assert "step:axis=x" in (tmp_path / "view.html").read_text()
+    result = run_here("animate", folder, "-o", tmp_path / "step.gif", "--max-frames", "2",
+                      "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "step.gif").read_bytes()[:6] == b"GIF89a"
 
 
 def test_the_states_figure_marks_the_step_response(step):

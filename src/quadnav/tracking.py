@@ -55,13 +55,16 @@ def track_world(reference: Reference) -> World:
     """The empty world a reference is flown in: its bounding box (sampled every
     :data:`BOX_DT` s) widened by :data:`BOUNDARY_SLACK` on every side, its lower face at
     z = 0 instead when the reference stays at least :data:`FLOOR_CLEARANCE` above it;
-    start and goal where the reference starts and ends; named after the reference."""
+    start and goal where the reference starts and ends (to a picometre); named after the
+    reference."""
     points = reference.sample(BOX_DT).position
     low, high = points.min(axis=0) - BOUNDARY_SLACK, points.max(axis=0) + BOUNDARY_SLACK
     if points[:, 2].min() >= FLOOR_CLEARANCE:
         low[2] = 0.0
-    return World(np.concatenate([low, high]), start=reference.position(0.0),
-                 goal=reference.position(reference.duration), name=reference_name(reference))
+    start, goal = (np.round(reference.position(t), 12) + 0.0  # round-off (and -0) shown as 0
+                   for t in (0.0, reference.duration))
+    return World(np.concatenate([low, high]), start=start, goal=goal,
+                 name=reference_name(reference))
 
 
 @dataclass(frozen=True, eq=False)
