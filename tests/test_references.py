@@ -224,15 +224,6 @@ BAD_FILES = [
 ]
 
 
-@pytest.mark.parametrize(("text", "message"), BAD_FILES)
-def test_a_bad_mp_csv_is_one_line_naming_the_line_and_column(tmp_path, text, message):
-    path = tmp_path / "MP.csv"
-    path.write_text(text)
-    with pytest.raises(MapError) as error:
-        load_reference(path)
-    assert str(error.value).startswith(str(tmp_path)) and message in str(error.value)
-
-
 HEADER = "t,x,y,z,vx,vy,vz,ax,ay,az,yaw\n"
 ROW = ",0,0,1,0,0,0,0,0,0,0\n"
 BAD_TABLES = [
@@ -246,13 +237,14 @@ BAD_TABLES = [
 ]
 
 
-@pytest.mark.parametrize(("text", "message"), BAD_TABLES)
-def test_a_bad_trajectory_csv_is_one_line_naming_the_line(tmp_path, text, message):
-    path = tmp_path / "trajectory.csv"
+@pytest.mark.parametrize(("text", "message"), BAD_FILES + BAD_TABLES)
+def test_a_bad_file_is_one_line_naming_the_line_and_column(tmp_path, text, message):
+    path = tmp_path / message.partition(":")[0]  # MP.csv or trajectory.csv
     path.write_text(text)
     with pytest.raises(MapError) as error:
         load_reference(path)
-    assert message in str(error.value), str(error.value)
+    assert str(error.value).startswith(str(tmp_path)) and message in str(error.value)
+    assert "\n" not in str(error.value)
 
 
 def test_an_unknown_source_and_a_bad_rate_are_one_line(tmp_path):
