@@ -131,8 +131,8 @@ def sample_every(reference: Reference, dt: float) -> Samples:
 
 def grid_times(duration: float, dt: float) -> FloatArray:
     """(N,) times ``k dt`` for k = 0 .. ceil(duration / dt): exactly uniform, the last at
-    or after the end (where a reference holds still); for a file with no times, such as
-    the course's MP.csv.
+    or after the end (where a reference holds still), or within 1e-9 ``dt`` before it; for
+    a file with no times, such as the course's MP.csv.
 
     Raises:
         ValueError: ``dt`` not > 0.
