@@ -133,7 +133,7 @@ def test_bad_flags_are_one_line_exit_2(flown, tmp_path, args, fragments):
 
 def test_bad_folders_are_one_line_exit_2(pathless, tmp_path):
     assert_user_error(run("animate", tmp_path / "nowhere", "-o", tmp_path / "a.gif"),
-                      "nowhere", "not a quadnav fly output folder")
+                      "nowhere", "not a quadnav fly or track output folder")
     assert_user_error(quadnav("animate", pathless, "-o", tmp_path / "a.gif"),
                       str(pathless), "no path", "no flight to animate")
     assert list(tmp_path.iterdir()) == []

@@ -16,6 +16,7 @@ from quadnav.errors import QuadnavError
 from quadnav.sim.flight import Ending
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
+from quadnav.sim.step_response import step_response
 from quadnav.trajectory.model import hold_trajectory
 from quadnav.vehicle.dynamics import hover_state
 from quadnav.vehicle.params import load_params
@@ -51,11 +52,8 @@ def _step(params, axis: int, size: float, gains: Gains | None = None, seconds: f
     flight = simulate(hold_trajectory(HOME, seconds), params,
                       gains or load_gains(preset=params.gains), settings=FULL_RECORD,
                       initial_state=start)
-    x = flight.position[:, axis]
-    overshoot = (x.max() - HOME[axis]) / size
-    outside = np.flatnonzero(np.abs(x - HOME[axis]) > 0.02 * size)
-    settling = flight.t[outside[-1] + 1] if len(outside) else 0.0
-    return flight, overshoot, settling
+    response = step_response(flight.t, flight.position, start[0:3], HOME, 0.0)
+    return flight, response.overshoot, response.settling_time
 
 
 #: (vehicle, axis, step m, largest overshoot as a fraction, largest 2 % settling time s)

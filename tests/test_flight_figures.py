@@ -17,8 +17,12 @@ from quadnav.report.rundir import FIGURES, REPORT, Run, read_run, write_run
 from quadnav.sim.flight import Ending
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import make_trajectory
+from quadnav.vehicle.quaternion import euler_angles
 from quadnav.viz.flight_figures import (
     MIN_SPAN,
+    actual_acceleration,
+    attitude_motors_figure,
+    desired_acceleration,
     desired_velocity,
     figure_makers,
     flight_3d_figure,
@@ -176,14 +180,22 @@ def test_states_figure_plots_desired_and_actual_per_axis(which, request):
     original = request.getfixturevalue("mission" if which == "run" else "crashed_mission")
     flight = run.flight
     fig = flight_states_figure(run)
-    assert len(fig.axes) == 6
-    axes = np.array(fig.axes).reshape(3, 2)
+    assert len(fig.axes) == 9
+    axes = np.array(fig.axes).reshape(3, 3)
     wanted_velocity = desired_velocity(run)
     # The velocity read back from trajectory.csv is the one the controller was given (a
     # crash ends between two 10 ms rows, where interpolating is off by jerk dt^2 / 8).
     assert np.allclose(wanted_velocity, original.flight.reference[:, 3:6], atol=1e-4)
+    wanted_acceleration = desired_acceleration(run)
+    assert np.allclose(wanted_acceleration, original.flight.reference[:, 6:9], atol=2e-3)
+    # The flown acceleration: the velocity's finite differences, close to the reference's
+    # where the flight tracks it well.
+    flown_acceleration = actual_acceleration(flight)
+    if which == "run":
+        assert np.sqrt(np.mean((flown_acceleration - wanted_acceleration) ** 2)) < 0.5
     columns = ((flight.reference, flight.position, "m)"),
-               (wanted_velocity, flight.velocity, "m/s)"))
+               (wanted_velocity, flight.velocity, "m/s)"),
+               (wanted_acceleration, flown_acceleration, "m/s²)"))
     for column, (desired, actual, unit) in enumerate(columns):
         for axis in range(3):
             ax = axes[axis, column]
@@ -197,8 +209,36 @@ def test_states_figure_plots_desired_and_actual_per_axis(which, request):
             low, high = ax.get_ylim()  # a still axis (the crash flies along x) stays flat
             assert high - low >= MIN_SPAN - 1e-12 and low <= actual[:, axis].min()
             assert high >= actual[:, axis].max()
-    assert axes[-1, 0].get_xlabel() == axes[-1, 1].get_xlabel() == "time (s)"
+    assert [axes[-1, k].get_xlabel() for k in range(3)] == ["time (s)"] * 3
+    assert [axes[0, k].get_title() for k in range(3)] == ["position", "velocity",
+                                                          "acceleration"]
     assert legend_texts(fig) == ["desired", "actual x", "actual y", "actual z"]
+    assert_legends_outside(fig)
+    assert_labels_apart(fig)
+
+
+@pytest.mark.parametrize("which", ["run", "crashed"])
+def test_attitude_figure_shows_roll_pitch_yaw_and_the_motor_commands(which, request):
+    run = request.getfixturevalue(which)
+    flight = run.flight
+    fig = attitude_motors_figure(run)
+    roll, pitch, yaw, motors = fig.axes
+    angles = np.degrees(euler_angles(flight.attitude))
+    for ax, column, name in ((roll, 0, "roll"), (pitch, 1, "pitch"), (yaw, 2, "yaw")):
+        assert ax.get_ylabel() == f"{name} (deg)"
+        drawn = line(ax, f"actual {name}")
+        assert np.array_equal(drawn.get_xdata(), flight.t)
+        assert np.allclose(drawn.get_ydata(), angles[:, column])
+    assert np.abs(angles[:, :2]).max() > 1.0  # the flight banks
+    reference = line(yaw, "yaw reference")
+    assert reference.get_linestyle() == "--"
+    assert np.allclose(reference.get_ydata(), np.degrees(run.trajectory.yaw[0]))  # constant
+    assert motors.get_ylabel() == "motor command" and motors.get_xlabel() == "time (s)"
+    for k in range(4):
+        assert np.array_equal(line(motors, f"motor {k + 1}").get_ydata(), flight.commands[:, k])
+    assert len({line(motors, f"motor {k + 1}").get_linestyle() for k in range(4)}) == 4
+    assert legend_texts(fig) == ["actual roll", "actual pitch", "actual yaw", "yaw reference",
+                                 "motor 1", "motor 2", "motor 3", "motor 4"]
     assert_legends_outside(fig)
     assert_labels_apart(fig)
 

@@ -157,7 +157,7 @@ def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):
     from quadnav.errors import QuadnavError
     from quadnav.report.rundir import read_run
 
-    with pytest.raises(QuadnavError, match="not a quadnav fly output folder"):
+    with pytest.raises(QuadnavError, match="not a quadnav fly or track output folder"):
         read_run(tmp_path)
 
 

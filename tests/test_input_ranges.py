@@ -78,7 +78,7 @@ def test_a_flight_too_long_for_its_rates_is_refused_before_anything_is_allocated
 
 def test_sampling_a_trajectory_is_bounded():
     assert len(hold_trajectory([0.0, 0.0, 1.0], 10.0).sample(1e-4).t) == 100_001
-    with pytest.raises(QuadnavError, match=r"a 100 s trajectory sampled every 0.0001 s gives "
+    with pytest.raises(QuadnavError, match=r"a 100 s reference sampled every 0.0001 s gives "
                                            r"samples: 1,000,001, at most 1,000,000; sample less "
                                            r"often \(--dt\)"):
         hold_trajectory([0.0, 0.0, 1.0], 100.0).sample(1e-4)

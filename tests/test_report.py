@@ -23,8 +23,8 @@ from quadnav.world import load_world
 SMALL = "forest:size=12x12x4,seed=2"
 IMAGE = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)" '
                    r'width="(\d+)" height="(\d+)"')
-#: Pixel sizes of the three figures (inches times 120 dpi).
-SIZES = [(1440, 840), (1320, 960), (1200, 480)]
+#: Pixel sizes of the four figures (inches times 120 dpi).
+SIZES = [(1440, 840), (1560, 960), (1200, 480), (1320, 1080)]
 
 
 @pytest.fixture(scope="module")
@@ -149,7 +149,7 @@ def test_one_folder_reports_into_it_by_default(flown, tmp_path, capsys, monkeypa
 def test_a_bad_folder_is_one_line_exit_2_and_writes_nothing(flown, tmp_path):
     out = tmp_path / "all.html"
     assert_user_error(run("report", flown, tmp_path / "nowhere", "-o", out),
-                      "nowhere", "not a quadnav fly output folder")
+                      "nowhere", "not a quadnav fly or track output folder")
     assert not out.exists()
 
 

@@ -15,6 +15,7 @@ from quadnav.trajectory.export import CSV_HEADER, mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import GRAVITY, Limits, feasibility
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.quintic import quintic_c2
+from quadnav.trajectory.reference import samples_at
 from quadnav.trajectory.timing import trapezoidal_times
 from quadnav.world import World, load_world
 
@@ -120,10 +121,15 @@ def test_csv_parses_back_to_the_samples(dt):
     np.testing.assert_allclose(table, expected, rtol=1e-8, atol=1e-12)
     assert table[-1, 0] == pytest.approx(trajectory.duration, rel=1e-9)
 
+    # MP.csv has no times: its columns are exactly k dt apart, the last at or after the end.
     mp = np.loadtxt(io.StringIO(mp_csv(trajectory, dt)), delimiter=",")
-    assert mp.shape == (9, len(samples.t))
-    np.testing.assert_allclose(mp, expected[:, 1:10].T, rtol=1e-8, atol=1e-12)
+    grid = np.arange(mp.shape[1]) * dt
+    assert grid[-2] < trajectory.duration <= grid[-1]
+    at_grid = samples_at(trajectory, grid)
+    np.testing.assert_allclose(mp, np.vstack([at_grid.position.T, at_grid.velocity.T,
+                                              at_grid.acceleration.T]), rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(mp[:3, -1], path[-1], rtol=1e-9)
+    np.testing.assert_allclose(mp[3:, -1], 0.0, atol=1e-12)
 
 
 # -------------------------------------------------------------- bad inputs

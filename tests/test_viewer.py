@@ -112,7 +112,7 @@ def test_text_from_the_run_cannot_break_out_of_the_page(unsolved):
 
 
 def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
-    assert_user_error(run("view", tmp_path), str(tmp_path), "not a quadnav fly output folder")
+    assert_user_error(run("view", tmp_path), str(tmp_path), "not a quadnav fly or track output folder")
     folder, _ = flown
     page = tmp_path / "no/such/dir/page.html"
     assert main(["view", str(folder), "-o", str(page)]) == 2

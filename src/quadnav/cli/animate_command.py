@@ -43,15 +43,15 @@ def animate(args: argparse.Namespace) -> int:
 def add_animate_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav animate`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "animate", help="animate a flight from a quadnav fly output folder (GIF or MP4)",
-        description="An animation of the flight in DIR (written by quadnav fly -o DIR): "
+        "animate", help="animate a flight from a quadnav fly or track output folder (GIF or MP4)",
+        description="An animation of the flight in DIR (written by quadnav fly or track -o DIR): "
                     "the map in 3D with the path and the trajectory, the flown track "
                     "growing, the drone (enlarged, turned by its recorded attitude) and the "
                     "flight time. A .gif is written with pillow; an .mp4 needs ffmpeg on "
                     "the PATH. Frames sample the flight evenly; a flight that needs more "
                     "than --max-frames frames plays faster than --speed (the command says "
                     "how fast). Exit 2 on bad input.")
-    p.add_argument("folder", metavar="DIR", help="a quadnav fly output folder")
+    p.add_argument("folder", metavar="DIR", help="a quadnav fly or track output folder")
     p.add_argument("-o", "--output", metavar="FILE",
                    help="the animation to write, ending in .gif or .mp4 (default: "
                         f"DIR/{DEFAULT_NAME})")

@@ -1,5 +1,6 @@
-"""Arguments shared by several commands: MAP, --margin, --start/--goal, and the argparse
-types of numbers, each checked against its stated range (:mod:`quadnav.limits`)."""
+"""Arguments shared by several commands: MAP, --margin, --start/--goal, the vehicle, the
+simulation and the run folder's flags of ``fly`` and ``track``, and the argparse types of
+numbers, each checked against its stated range (:mod:`quadnav.limits`)."""
 
 from __future__ import annotations
 
@@ -8,21 +9,28 @@ from collections.abc import Callable
 
 import numpy as np
 
+from quadnav.control.gains import Gains, load_gains
 from quadnav.limits import (
     ACCELERATION,
     COORDINATE,
+    FORCE,
+    GUSTS,
     HEADING_DEGREES,
     LENGTH,
     MARGIN,
     PLAN_ITERATIONS,
     PLAN_TIME,
+    RATE,
     SEED,
+    SETTLE,
     SPEED,
     TIME_SCALE,
     Range,
 )
 from quadnav.planning import PlannerSettings, planner_names
+from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import METHODS, TIMINGS
+from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
 from quadnav.world import World, read_start_goal
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 
@@ -157,9 +165,7 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
                         help=f"one of {', '.join(planner_names())} (default: rrtstar)")
     parser.add_argument("--time", type=plan_time, default=time, metavar="S",
                         help=f"search time budget, {PLAN_TIME.describe()} (default: {time:g})")
-    parser.add_argument("--seed", type=seed_value, default=0, metavar="N",
-                        help="random seed, 0 to 2^63 - 1; the same seed gives the same result "
-                             "(default: 0)")
+    add_seed_argument(parser, "random seed")
     budget = f"{iterations:,} samples" if iterations else "no cap"
     parser.add_argument("--iterations", type=samples, default=iterations, metavar="N",
                         help=f"stop after N samples in all, at most {PLAN_ITERATIONS.high:,}; "
@@ -177,3 +183,70 @@ def planner_budget(args: argparse.Namespace) -> PlannerSettings:
     """The search budget and seed from the flags of :func:`add_planner_arguments`."""
     return PlannerSettings(time_limit=args.time, max_iterations=args.iterations or None,
                            improve_iterations=args.improve, seed=args.seed)
+
+
+def add_seed_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """--seed N, 0 to 2^63 - 1 (default 0); ``what`` says what it seeds."""
+    parser.add_argument("--seed", type=seed_value, default=0, metavar="N",
+                        help=f"{what}, 0 to 2^63 - 1; the same seed gives the same result "
+                             "(default: 0)")
+
+
+def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
+    """--params NAME|FILE (the vehicle) and --gains FILE (the controller)."""
+    parser.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
+                        help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
+                             f"(default: {DEFAULT_PRESET})")
+    parser.add_argument("--gains", metavar="FILE",
+                        help="controller gains TOML file; keys it leaves out keep the gains "
+                             "tuned for the vehicle")
+
+
+def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:
+    """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here)."""
+    vehicle = load_params(args.params)
+    return vehicle, load_gains(args.gains, vehicle.gains)
+
+
+def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
+    """--physics-rate, --control-rate, --wind FX FY FZ, --gusts N and --settle S."""
+    parser.add_argument("--physics-rate", type=number_in(RATE), default=SimSettings.physics_rate,
+                        metavar="HZ", help=f"RK4 steps per second, {RATE.describe()} "
+                                           f"(default: {SimSettings.physics_rate:g})")
+    parser.add_argument("--control-rate", type=number_in(RATE), default=SimSettings.control_rate,
+                        metavar="HZ", help=f"controller updates per second, {RATE.describe()}; "
+                                           "the physics rate must be a whole multiple "
+                                           f"(default: {SimSettings.control_rate:g})")
+    parser.add_argument("--wind", nargs=3, type=number_in(FORCE), default=[0.0, 0.0, 0.0],
+                        metavar=("FX", "FY", "FZ"),
+                        help=f"steady wind as a force on the vehicle, world frame, each "
+                             f"{FORCE.describe()} (default: none)")
+    parser.add_argument("--gusts", type=number_in(GUSTS), default=0.0, metavar="N",
+                        help=f"random gusts: standard deviation of a force per axis, "
+                             f"{GUSTS.describe()}, redrawn every "
+                             f"{SimSettings.gust_period:g} s from the seed (default: 0)")
+    parser.add_argument("--settle", type=number_in(SETTLE), default=SimSettings.settle_time,
+                        metavar="S", help=f"time flown after the reference ends, "
+                                          f"{SETTLE.describe()} "
+                                          f"(default: {SimSettings.settle_time:g})")
+
+
+def simulation_settings(args: argparse.Namespace) -> SimSettings:
+    """The settings of :func:`add_simulation_arguments` and ``--seed``."""
+    return SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
+                       settle_time=args.settle, wind=args.wind, gust_std=args.gusts,
+                       seed=args.seed)
+
+
+def add_run_output_arguments(parser: argparse.ArgumentParser, folder: str, report: str) -> None:
+    """--no-figures, --html, --quiet and -o DIR (default ``folder``) of a command that
+    writes a run folder with the report file ``report``."""
+    parser.add_argument("--no-figures", action="store_true",
+                        help=f"skip the figures and {report} (faster, e.g. for batches of "
+                             "runs; quadnav report DIR writes the report later)")
+    parser.add_argument("--html", action="store_true",
+                        help="also write DIR/view.html, an interactive 3D page of the run "
+                             "that works offline (the same as quadnav view DIR)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("-o", "--output", default=folder, metavar="DIR",
+                        help=f"folder to write into, created if needed (default: {folder})")

@@ -63,15 +63,15 @@ def add_blender_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav blender`` on the top-level subparsers."""
     p = subparsers.add_parser(
         "blender", help="a run folder as a Blender scene (.blend), with optional renders",
-        description="Build a Blender scene of a quadnav fly output folder and save it as a "
-                    ".blend: the blocks as cubes in their colours, the boundary as a black "
+        description="Build a Blender scene of a quadnav fly or track output folder and save "
+                    "it as a .blend: the blocks as cubes in their colours, the boundary as a black "
                     "box of alpha 0.344, the start (red) and goal (green) spheres, the "
                     f"explored tree (at most {MAX_TREE_EDGES:,} edges), the path (red), the "
                     "trajectory (orange) and a drone keyframed along the flight with its "
                     "recorded position and attitude. --render renders a still with "
                     "Blender's Workbench engine, headless. Needs Blender's Python module: "
                     f"{INSTALL_HINT}.")
-    p.add_argument("folder", metavar="DIR", help="folder written by quadnav fly -o DIR")
+    p.add_argument("folder", metavar="DIR", help="folder written by quadnav fly or track -o DIR")
     p.add_argument("-o", "--output", metavar="FILE.blend",
                    help="the .blend file to write (default: DIR/scene.blend)")
     p.add_argument("--render", action="append", default=[], metavar="NAME.png",

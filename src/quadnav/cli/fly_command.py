@@ -10,17 +10,20 @@ from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
     add_planner_arguments,
+    add_run_output_arguments,
+    add_simulation_arguments,
     add_start_goal_arguments,
     add_timing_arguments,
-    number_in,
+    add_vehicle_arguments,
     planner_budget,
     resolve_margin,
     resolve_start_goal,
+    simulation_settings,
     speed_or_max,
+    vehicle_and_gains,
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
-from quadnav.control.gains import load_gains
-from quadnav.limits import ACCELERATION, FORCE, GUSTS, RATE, SETTLE, SPEED
+from quadnav.limits import ACCELERATION, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
     DEFAULT_IMPROVE,
@@ -33,9 +36,8 @@ from quadnav.mission import (
 from quadnav.planning import get_planner, make_problem
 from quadnav.report.rundir import FIGURES, REPORT, write_run
 from quadnav.runfolder import check_output_folder
-from quadnav.sim.settings import SimSettings
+from quadnav.sim.flight import Flight
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names
 from quadnav.world import load_world
 
 #: Exit code of a flight that collided, missed the goal or found no path.
@@ -44,7 +46,7 @@ EXIT_FAILED = 1
 
 def mission_settings(args: argparse.Namespace) -> MissionSettings:
     """Mission settings from the command-line flags (files are read here)."""
-    vehicle = load_params(args.params)
+    vehicle, gains = vehicle_and_gains(args)
     return MissionSettings(
         planner=args.planner,
         planning=planner_budget(args),
@@ -52,10 +54,8 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
                                       v_max=args.speed or DEFAULT_SPEED, a_max=args.accel),
         fastest=args.speed is None,
         vehicle=vehicle,
-        gains=load_gains(args.gains, vehicle.gains),
-        sim=SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
-                        settle_time=args.settle, wind=args.wind, gust_std=args.gusts,
-                        seed=args.seed),
+        gains=gains,
+        sim=simulation_settings(args),
     )
 
 
@@ -83,14 +83,19 @@ def _failure(mission: Mission) -> str:
     """One line saying why the mission failed."""
     if mission.flight is None:
         return f"no path: {mission.plan.message}"
-    flight = mission.flight
+    return flight_failure(mission.flight, mission.settings.sim.goal_tolerance)
+
+
+def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
+    """One line saying why a flight failed: a collision, leaving the map, diverging, or
+    ending more than ``goal_tolerance`` m from ``goal``."""
     if flight.contact_block is not None:
         return (f"collided with block {flight.contact_block} at t = "
                 f"{flight.contact_time:.2f} s")
     if flight.contact_time is not None:
         return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
-    return (f"ended {100 * flight.final_error:.1f} cm from the goal (tolerance "
-            f"{100 * mission.settings.sim.goal_tolerance:.0f} cm)")
+    return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
+            f"{100 * goal_tolerance:.0f} cm)")
 
 
 def _print_summary(mission: Mission) -> None:
@@ -141,36 +146,8 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         ": one budget for speeding up, braking and turning (default: "
                         f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
     add_timing_arguments(p)
-    p.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
-                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                        f"(default: {DEFAULT_PRESET})")
-    p.add_argument("--gains", metavar="FILE",
-                   help="controller gains TOML file; keys it leaves out keep the gains tuned "
-                        "for the vehicle")
+    add_vehicle_arguments(p)
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
-    p.add_argument("--physics-rate", type=number_in(RATE), default=SimSettings.physics_rate,
-                   metavar="HZ", help=f"RK4 steps per second, {RATE.describe()} "
-                                      "(default: 1000)")
-    p.add_argument("--control-rate", type=number_in(RATE), default=SimSettings.control_rate,
-                   metavar="HZ", help=f"controller updates per second, {RATE.describe()}; the "
-                                      "physics rate must be a whole multiple (default: 1000)")
-    p.add_argument("--wind", nargs=3, type=number_in(FORCE), default=[0.0, 0.0, 0.0],
-                   metavar=("FX", "FY", "FZ"),
-                   help=f"steady wind as a force on the vehicle, world frame, each "
-                        f"{FORCE.describe()} (default: none)")
-    p.add_argument("--gusts", type=number_in(GUSTS), default=0.0, metavar="N",
-                   help=f"random gusts: standard deviation of a force per axis, "
-                        f"{GUSTS.describe()}, redrawn every 0.2 s from the seed (default: 0)")
-    p.add_argument("--settle", type=number_in(SETTLE), default=SimSettings.settle_time,
-                   metavar="S", help=f"time flown after the trajectory ends, "
-                                     f"{SETTLE.describe()} (default: 2)")
-    p.add_argument("--no-figures", action="store_true",
-                   help=f"skip the figures and {REPORT} (faster, e.g. for batches of "
-                        "runs; quadnav report DIR writes the report later)")
-    p.add_argument("--html", action="store_true",
-                   help="also write DIR/view.html, an interactive 3D page of the run that "
-                        "works offline (the same as quadnav view DIR)")
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
-    p.add_argument("-o", "--output", default="flight", metavar="DIR",
-                   help="folder to write into, created if needed (default: flight)")
+    add_simulation_arguments(p)
+    add_run_output_arguments(p, "flight", REPORT)
     p.set_defaults(handler=fly)

@@ -23,9 +23,10 @@ from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
 from quadnav.cli.report_command import add_report_command
 from quadnav.cli.tello_command import add_tello_command
+from quadnav.cli.track_command import add_track_command
 from quadnav.cli.traj_command import add_traj_command
 from quadnav.cli.view_command import add_view_command
-from quadnav.cli.worlds_command import add_worlds_command
+from quadnav.cli.worlds_command import add_references_command, add_worlds_command
 from quadnav.errors import QuadnavError
 
 EXIT_USAGE = 2
@@ -47,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"quadnav {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     add_fly_command(commands)
+    add_track_command(commands)
     add_animate_command(commands)
     add_blender_command(commands)
     add_map_commands(commands)
@@ -56,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_view_command(commands)
     add_kino_command(commands)
     add_worlds_command(commands)
+    add_references_command(commands)
     add_tello_command(commands)
     return parser
 

@@ -23,15 +23,15 @@ def report(args: argparse.Namespace) -> int:
 def add_report_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav report`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "report", help="write an HTML report of one or more quadnav fly output folders",
+        "report", help="write an HTML report of one or more quadnav fly or track output folders",
         description="One self-contained HTML file (images embedded, no external links) with "
                     "a section per run folder: the map and outcome, the explored tree with "
                     "the path in red, desired against actual position and velocity, the "
                     "tracking error, the metrics and every parameter used; with several "
                     "folders, an overview table first. Figures are the folder's PNG files, "
                     "or drawn from its data when it has none (quadnav fly --no-figures). "
-                    f"quadnav fly writes DIR/{REPORT} itself. Exit 2 on bad input.")
-    p.add_argument("folders", nargs="+", metavar="DIR", help="quadnav fly output folders")
+                    f"quadnav fly and track write DIR/{REPORT} themselves. Exit 2 on bad input.")
+    p.add_argument("folders", nargs="+", metavar="DIR", help="quadnav fly or track output folders")
     p.add_argument("-o", "--output", metavar="FILE",
                    help=f"the report to write, ending in .html (default: DIR/{REPORT} for one "
                         f"folder, {REPORT} in the current folder for several)")

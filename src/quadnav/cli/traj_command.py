@@ -30,6 +30,7 @@ from quadnav.trajectory.feasibility import Limits, feasibility
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.pathfile import read_path_csv
+from quadnav.trajectory.sampled import COURSE_MP_RATE
 from quadnav.trajectory.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.world import load_world
@@ -114,7 +115,11 @@ def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--dt", type=number_in(SAMPLE_INTERVAL), default=DEFAULT_DT, metavar="S",
                    help=f"sample interval of the CSV files, {SAMPLE_INTERVAL.describe()} "
                         f"(default: {DEFAULT_DT:g}); the trajectory may last at most "
-                        f"{MAX_DURATION:g} s and give at most {MAX_SAMPLES:,} samples")
+                        f"{MAX_DURATION:g} s and give at most {MAX_SAMPLES:,} samples. MP.csv "
+                        "has no times: the course's code plays one column every "
+                        f"{1 / COURSE_MP_RATE:g} s, so write it with --dt "
+                        f"{1 / COURSE_MP_RATE:g} for that code (quadnav track MP.csv --rate "
+                        "1/dt reads it back)")
     p.add_argument("-o", "--output", default="traj", metavar="DIR",
                    help="folder to write into, created if needed (default: traj)")
     p.set_defaults(handler=traj)

@@ -23,13 +23,14 @@ def view(args: argparse.Namespace) -> int:
 def add_view_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav view`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "view", help="write an interactive 3D page (HTML) of a quadnav fly output folder",
+        "view", help="write an interactive 3D page (HTML) of a quadnav fly or track output folder",
         description="Write one self-contained HTML page showing the run in DIR (written by "
-                    "quadnav fly -o DIR): the map, the explored tree, the path, the trajectory "
-                    "coloured by speed, the flown track, a time slider moving the drone along "
-                    "the flight, and the metrics. Drag to rotate, wheel to zoom. The page "
-                    "needs no network and no files beside it; open it in any browser.")
-    p.add_argument("folder", metavar="DIR", help="a folder written by quadnav fly -o DIR")
+                    "quadnav fly -o DIR or quadnav track REF -o DIR): the map, the explored "
+                    "tree, the path, the trajectory coloured by speed, the flown track, a "
+                    "time slider moving the drone along the flight, and the metrics. Drag to "
+                    "rotate, wheel to zoom. The page needs no network and no files beside it; "
+                    "open it in any browser.")
+    p.add_argument("folder", metavar="DIR", help="a folder written by quadnav fly or quadnav track")
     p.add_argument("-o", "--output", metavar="FILE",
                    help=f"the page to write, ending in .html (default: DIR/{VIEW_PAGE})")
     p.set_defaults(handler=view)

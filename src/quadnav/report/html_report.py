@@ -1,8 +1,9 @@
 """A run report to hand in: one self-contained HTML file over one or more run folders.
 
-Each run gets a section: the map and outcome, the figures of the run (the explored tree
-with the path in red, desired against actual position and velocity, the tracking
-error), the metrics (metrics.json) and every parameter used (parameters.json, flattened
+Each run gets a section: the map (or, for ``quadnav track``, the reference) and outcome,
+the figures of the run (the explored tree with the path in red, desired against actual
+position, velocity and acceleration, the tracking error, the attitude and motor
+commands), the metrics (metrics.json) and every parameter used (parameters.json, flattened
 to dotted names). Images are embedded as base64 PNG and the style is inline, so the file
 opens anywhere, offline, on its own. Figures are the PNG files of the folder when it has
 them, else drawn from the folder read back, by the same functions.
@@ -24,6 +25,7 @@ from quadnav import __version__
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
 from quadnav.report.rundir import Run
+from quadnav.tracking import step_summary
 from quadnav.viz.flight_figures import figure_makers, run_outcome
 
 #: File name endings accepted for a report.
@@ -36,10 +38,13 @@ CAPTIONS = {
     "flight_3d.png": "The map with the explored tree (blue), the path (red, dashed), the "
                      "trajectory (orange) and the flown track (black), seen obliquely and "
                      "from above.",
-    "flight_states.png": "Desired (dashed) against actual (solid) position and velocity per "
-                         "axis against time.",
+    "flight_states.png": "Desired (dashed) against actual (solid) position, velocity and "
+                         "acceleration per axis against time (for a step: the 2 % band, "
+                         "the peak and the settling time).",
     "tracking_error.png": "Distance from the reference position against time, with its RMS "
                           "(dashed) and the largest recorded error.",
+    "attitude_motors.png": "Roll, pitch and yaw (the yaw reference dashed) and the four "
+                           "motor commands against time.",
 }
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
@@ -141,15 +146,23 @@ def _figure(png: bytes, name: str) -> str:
 def _summary(run: Run) -> str:
     """The outcome and the headline numbers of a run, one line of HTML."""
     m = run.metrics
-    parts = [f"{m['planner']} seed {m['seed']}", f"vehicle {m['vehicle']}",
-             f"top speed {m['speed_m_s']:g} m/s"]
+    if run.is_track:
+        parts = [f"vehicle {m['vehicle']}", f"reference {m['reference_duration_s']:.2f} s"]
+    else:
+        parts = [f"{m['planner']} seed {m['seed']}", f"vehicle {m['vehicle']}",
+                 f"top speed {m['speed_m_s']:g} m/s"]
     if run.flight is not None:
         clearance = m["min_clearance_m"]
-        parts += [f"path {m['path_length_m']:.2f} m", f"flight {m['flight_time_s']:.2f} s",
+        parts += [] if run.is_track else [f"path {m['path_length_m']:.2f} m"]
+        parts += [f"flight {m['flight_time_s']:.2f} s",
                   f"tracking error RMS {CM_PER_M * m['rms_tracking_error_m']:.2f} cm, max "
                   f"{CM_PER_M * m['max_tracking_error_m']:.2f} cm",
-                  f"final error {CM_PER_M * m['final_error_m']:.2f} cm",
-                  "min clearance " + ("none" if clearance is None else f"{clearance:.3f} m")]
+                  f"final error {CM_PER_M * m['final_error_m']:.2f} cm"]
+        if not run.is_track:
+            parts.append("min clearance " + ("none" if clearance is None
+                                             else f"{clearance:.3f} m"))
+        if "overshoot_percent" in m:
+            parts.append(step_summary(m))
     status = "success" if m["success"] else "failure"
     return (f'<p><span class="outcome {status}">{html.escape(run_outcome(m))}</span> — '
             f"{html.escape(', '.join(parts))}</p>")
@@ -169,11 +182,14 @@ def run_section(run: Run, number: int, folder: Path) -> str:
     parameters = _table(("parameter", "value"),
                         [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)))
                          for key, value in flatten(run.parameters)], 1)
-    return (f'<section id="run-{number}"><h2>Run {number}: {html.escape(m["map"])}</h2>'
-            f'<p class="muted">folder {html.escape(str(folder))}; map {size} m with '
-            f"{len(world.blocks)} blocks, start {html.escape(format_value(m['start']))} m, "
-            f"goal {html.escape(format_value(m['goal']))} m, margin "
-            f"{m['margin_m']:g} m</p>{_summary(run)}"
+    where = (f"flown in an empty box of {size} m" if run.is_track
+             else f"map {size} m with {len(world.blocks)} blocks")
+    margin = "" if run.is_track else f", margin {m['margin_m']:g} m"
+    return (f'<section id="run-{number}"><h2>Run {number}: {html.escape(run.title)}</h2>'
+            f'<p class="muted">folder {html.escape(str(folder))}; {where}, start '
+            f"{html.escape(format_value(m['start']))} m, "
+            f"{'end' if run.is_track else 'goal'} {html.escape(format_value(m['goal']))} m"
+            f"{margin}</p>{_summary(run)}"
             f"<h3>Figures</h3>{figures}"
             f"<h3>Metrics</h3>{metrics}"
             f"<h3>Parameters</h3>{parameters}</section>")
@@ -185,14 +201,14 @@ def _overview(runs: Sequence[Run]) -> str:
     def number(value: float | None, scale: float = 1.0) -> str:
         return "—" if value is None else f"{scale * value:.2f}"
 
-    rows = [(f'<a href="#run-{k}">{k}</a>', html.escape(run.metrics["map"]),
-             html.escape(run_outcome(run.metrics)), number(run.metrics["path_length_m"]),
+    rows = [(f'<a href="#run-{k}">{k}</a>', html.escape(run.title),
+             html.escape(run_outcome(run.metrics)), number(run.metrics.get("path_length_m")),
              number(run.metrics.get("flight_time_s")),
              number(run.metrics.get("rms_tracking_error_m"), CM_PER_M),
              number(run.metrics.get("max_tracking_error_m"), CM_PER_M))
             for k, run in enumerate(runs, start=1)]
     return "<h2>Overview</h2>" + _table(
-        ("run", "map", "outcome", "path (m)", "flight (s)", "RMS error (cm)",
+        ("run", "map or reference", "outcome", "path (m)", "flight (s)", "RMS error (cm)",
          "max error (cm)"), rows, 1)
 
 
@@ -200,7 +216,7 @@ def report_html(runs: Sequence[Run], shown: Sequence[Path] | None = None) -> str
     """The whole report over ``runs`` (at least one) as one HTML document; ``shown``: the
     folder to name for each run (default: where each was read from)."""
     title = ("quadnav flight report" if len(runs) > 1
-             else f"quadnav flight report: {runs[0].metrics['map']}")
+             else f"quadnav flight report: {runs[0].title}")
     folders = shown or [run.folder for run in runs]
     sections = "".join(run_section(run, k, folder)
                        for k, (run, folder) in enumerate(zip(runs, folders, strict=True), 1))

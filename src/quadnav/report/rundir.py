@@ -1,16 +1,20 @@
-"""A run folder: what ``quadnav fly`` writes, and :func:`read_run` to read it back.
+"""A run folder: what ``quadnav fly`` and ``quadnav track`` write, and :func:`read_run` to
+read it back.
 
 Files (every number SI, world frame z up):
 
 ================== ============================================================
-``metrics.json``   outcome and figures of merit (:meth:`Mission.metrics`)
-``parameters.json`` every setting used (:meth:`Mission.parameters`)
-``map.json``       the map, with the start, goal and margin flown (JSON map format)
-``tree.csv``       the explored tree: ``x,y,z,parent`` per vertex (parent -1: a root)
-``path.csv``       the refined path, ``x,y,z`` per vertex (only with a path)
-``trajectory.csv`` the reference every 10 ms (only with a path)
-``flight.csv``     the flight record (only with a path)
-``*.png``          figures (unless skipped; only the 3D view without a path)
+``metrics.json``   outcome and figures of merit (:meth:`Mission.metrics`,
+                   :meth:`Tracking.metrics`)
+``parameters.json`` every setting used (``parameters()`` of either)
+``map.json``       the map, with the start, goal and margin flown (JSON map format);
+                   for a track, the empty world it was flown in
+``tree.csv``       the explored tree: ``x,y,z,parent`` per vertex (parent -1: a root;
+                   fly only)
+``path.csv``       the refined path, ``x,y,z`` per vertex (fly, only with a path)
+``trajectory.csv`` the reference every 10 ms (only with a flight)
+``flight.csv``     the flight record (only with a flight)
+``*.png``          figures (unless skipped; only the 3D view without a flight)
 ``report.html``    the run report (:mod:`quadnav.report.html_report`, unless skipped)
 ================== ============================================================
 
@@ -29,11 +33,13 @@ import numpy as np
 from quadnav.errors import QuadnavError
 from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
-from quadnav.planning.result import tree_edges
+from quadnav.planning.result import IntArray, tree_edges
 from quadnav.runfolder import replaced_folder
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
+from quadnav.sim.flight import Flight
+from quadnav.tracking import Tracking
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
-from quadnav.trajectory.model import Samples
+from quadnav.trajectory.reference import Reference, Samples
 from quadnav.vehicle.params import FloatArray
 from quadnav.world import World, read_map
 from quadnav.world.mapfile import format_map
@@ -41,12 +47,12 @@ from quadnav.world.mapfile import format_map
 #: Sample interval of trajectory.csv, s.
 TRAJECTORY_DT = 0.01
 #: Figures a run writes, in the order the report shows them.
-FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png")
+FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png", "attitude_motors.png")
 #: The HTML report written with the figures (:mod:`.html_report`).
 REPORT = "report.html"
 #: The interactive page written on request (:mod:`quadnav.viz.html_viewer`).
 VIEW_PAGE = "view.html"
-#: Files written only when there is a path.
+#: Files written only when there was a flight (path.csv: by fly only).
 FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
 #: Every file a run folder can hold.
 RUN_FILES = ("metrics.json", "parameters.json", "map.json", "tree.csv", *FLIGHT_FILES,
@@ -54,9 +60,47 @@ RUN_FILES = ("metrics.json", "parameters.json", "map.json", "tree.csv", *FLIGHT_
 TREE_HEADER = "x,y,z,parent"
 
 
-def write_run(mission: Mission, folder: str | Path, figures: bool = True,
+@dataclass(frozen=True, eq=False)
+class RunContent:
+    """What a run folder holds, whatever made it (:func:`run_content`).
+
+    Attributes:
+        world: the map, with the start, goal and margin flown.
+        metrics: for metrics.json.
+        parameters: for parameters.json.
+        tree: the explored tree's vertices (N, 3) m and parent rows (N,), or None.
+        path: (M, 3) the refined path, m, or None.
+        reference: what was flown, or None without a flight.
+        flight: the flight, or None.
+    """
+
+    world: World
+    metrics: dict
+    parameters: dict
+    tree: tuple[FloatArray, IntArray] | None
+    path: FloatArray | None
+    reference: Reference | None
+    flight: Flight | None
+
+
+def run_content(run: Mission | Tracking) -> RunContent:
+    """The content of the run folder of a mission (``quadnav fly``) or a tracking
+    (``quadnav track``: no tree, no path)."""
+    if isinstance(run, Tracking):
+        return RunContent(run.world, run.metrics(), run.parameters(), None, None,
+                          run.reference, run.flight)
+    problem, plan = run.problem, run.plan
+    flown = run.flight is not None
+    return RunContent(
+        problem.world.replace(start=problem.start, goal=problem.goal, margin=problem.margin),
+        run.metrics(), run.parameters(), (plan.tree_nodes, plan.tree_parents),
+        plan.path if flown else None, run.trajectory if flown else None, run.flight)
+
+
+def write_run(run: Mission | Tracking | RunContent, folder: str | Path, figures: bool = True,
               html: bool = False) -> list[str]:
-    """Write the run folder of ``mission`` (created if needed), whole or not at all
+    """Write the run folder of ``run`` (a mission, a tracking or their
+    :func:`run_content`; the folder is created if needed), whole or not at all
     (:func:`~quadnav.runfolder.replaced_folder`); returns the names written.
 
     The text files are written first; the new files are then read back once
@@ -66,29 +110,27 @@ def write_run(mission: Mission, folder: str | Path, figures: bool = True,
     one does not write are removed then, so the folder never mixes two runs; an interrupted
     or failed write leaves it as it was."""
     folder = Path(folder)
+    content = run if isinstance(run, RunContent) else run_content(run)
     with replaced_folder(folder, RUN_FILES) as staging:
-        return _write_files(mission, staging, folder, figures, html)
+        return _write_files(content, staging, folder, figures, html)
 
 
-def _write_files(mission: Mission, staging: Path, folder: Path, figures: bool,
+def _write_files(content: RunContent, staging: Path, folder: Path, figures: bool,
                  html: bool) -> list[str]:
     """Write the files of :func:`write_run` into the empty ``staging`` folder; the report
     names ``folder`` as the run's."""
-    problem = mission.problem
-    world = problem.world.replace(start=problem.start, goal=problem.goal,
-                                  margin=problem.margin)
-    plan = mission.plan
     texts = {
-        "metrics.json": _json(mission.metrics()),
-        "parameters.json": _json(mission.parameters()),
-        "map.json": format_map(world, "map.json"),
-        "tree.csv": csv_table(np.column_stack([plan.tree_nodes, plan.tree_parents]),
-                              TREE_HEADER),
+        "metrics.json": _json(content.metrics),
+        "parameters.json": _json(content.parameters),
+        "map.json": format_map(content.world, "map.json"),
     }
-    if mission.flight is not None:
-        texts["path.csv"] = path_csv(plan.path)
-        texts["trajectory.csv"] = trajectory_csv(mission.trajectory, TRAJECTORY_DT)
-        texts["flight.csv"] = flight_csv(mission.flight)
+    if content.tree is not None:
+        texts["tree.csv"] = csv_table(np.column_stack(content.tree), TREE_HEADER)
+    if content.path is not None:
+        texts["path.csv"] = path_csv(content.path)
+    if content.reference is not None and content.flight is not None:
+        texts["trajectory.csv"] = trajectory_csv(content.reference, TRAJECTORY_DT)
+        texts["flight.csv"] = flight_csv(content.flight)
     for name, text in texts.items():
         (staging / name).write_text(text, encoding="utf-8")
     written = list(texts)
@@ -150,9 +192,9 @@ class Run:
         world: the map with the start, goal and margin flown.
         metrics: metrics.json.
         parameters: parameters.json.
-        tree_nodes: (N, 3) explored tree vertices, m.
+        tree_nodes: (N, 3) explored tree vertices, m (none for a track).
         tree_parents: (N,) parent row of each vertex, -1 for a root.
-        path: (M, 3) refined path, or None without a path.
+        path: (M, 3) refined path, or None without a path (and for a track).
         trajectory: the reference, or None.
         flight: the flight record, or None.
     """
@@ -170,6 +212,16 @@ class Run:
     def tree_edges(self) -> FloatArray:
         """(E, 2, 3) segments from each non-root vertex to its parent."""
         return tree_edges(self.tree_nodes, self.tree_parents)
+
+    @property
+    def is_track(self) -> bool:
+        """Whether ``quadnav track`` wrote the folder (a reference flown, no planning)."""
+        return "reference" in self.metrics
+
+    @property
+    def title(self) -> str:
+        """What the run flew: the reference of a track, else the map."""
+        return self.metrics["reference"] if self.is_track else self.metrics["map"]
 
 
 def _table(path: Path, header: str) -> np.ndarray:
@@ -200,15 +252,19 @@ def _json_file(path: Path) -> dict:
 
 
 def read_run(folder: str | Path) -> Run:
-    """The run folder at ``folder``; QuadnavError naming the file if one is missing or bad."""
+    """The run folder at ``folder`` (of ``quadnav fly`` or ``quadnav track``: a folder
+    without tree.csv has an empty tree, one without path.csv no path); QuadnavError naming
+    the file if one is missing or bad."""
     folder = Path(folder)
     if not (folder / "metrics.json").is_file():
-        raise QuadnavError(f"{folder}: not a quadnav fly output folder (no metrics.json); "
-                           "run quadnav fly -o DIR first")
-    tree = _table(folder / "tree.csv", TREE_HEADER)
-    path = trajectory = flight = None
+        raise QuadnavError(f"{folder}: not a quadnav fly or track output folder (no "
+                           "metrics.json); run quadnav fly -o DIR or quadnav track REF -o DIR "
+                           "first")
+    tree = (_table(folder / "tree.csv", TREE_HEADER) if (folder / "tree.csv").is_file()
+            else np.zeros((0, 4)))
+    path = _table(folder / "path.csv", "x,y,z") if (folder / "path.csv").is_file() else None
+    trajectory = flight = None
     if (folder / "flight.csv").is_file():
-        path = _table(folder / "path.csv", "x,y,z")
         t = _table(folder / "trajectory.csv", CSV_HEADER)
         trajectory = Samples(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
         f = _table(folder / "flight.csv", FLIGHT_HEADER)

@@ -1,10 +1,11 @@
-"""Fly a trajectory in simulation: :func:`simulate`.
+"""Fly a reference in simulation: :func:`simulate`.
 
-The trajectory is sampled once at the control rate into a reference table (position,
-velocity, acceleration, yaw, yaw rate; held at the end during the settling time); the
-wind, gusts and sensor noise are drawn up front from ``settings.seed``; then the
-compiled loop (:mod:`quadnav.sim.loop`) runs in chunks of :data:`CHUNK_SECONDS` of
-flight, calling ``progress`` in between.
+The reference (a :class:`~quadnav.trajectory.reference.Reference`: a trajectory, a
+built-in shape or samples read from a file) is sampled once at the control rate into a
+reference table (position, velocity, acceleration, yaw, yaw rate; held at the end during
+the settling time); the wind, gusts and sensor noise are drawn up front from
+``settings.seed``; then the compiled loop (:mod:`quadnav.sim.loop`) runs in chunks of
+:data:`CHUNK_SECONDS` of flight, calling ``progress`` in between.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from quadnav.sim import loop
 from quadnav.sim.collision import body_grid
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
-from quadnav.trajectory.model import Trajectory
+from quadnav.trajectory.reference import Reference
 from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, vehicle_arrays
 from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
 from quadnav.world.model import World
@@ -54,7 +55,7 @@ def flight_steps(duration: float, settings: SimSettings) -> int:
     return steps
 
 
-def reference_table(trajectory: Trajectory, dt: float, steps: int) -> FloatArray:
+def reference_table(trajectory: Reference, dt: float, steps: int) -> FloatArray:
     """(steps, 11) reference rows at times ``k dt``: position, velocity, acceleration,
     yaw, yaw rate (the yaw's finite difference)."""
     t = np.arange(steps) * dt
@@ -80,7 +81,7 @@ def _disturbances(settings: SimSettings, steps: int, dt: float) -> tuple[FloatAr
     return forces, noise
 
 
-def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
+def simulate(trajectory: Reference, params: VehicleParams | None = None,
              gains: Gains | None = None, world: World | None = None,
              settings: SimSettings | None = None,
              progress: Callable[[float], None] | None = None,
@@ -88,7 +89,8 @@ def simulate(trajectory: Trajectory, params: VehicleParams | None = None,
     """Fly ``trajectory`` from a hover at its start through the cascade and the dynamics.
 
     Args:
-        trajectory: the reference.
+        trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
+            any other :class:`~quadnav.trajectory.reference.Reference`.
         params: the vehicle (default: the ``tello`` preset).
         gains: the controller (default: :class:`~quadnav.control.gains.Gains`).
         world: the real (uninflated) map: its blocks are obstacles, its boundary the box

@@ -4,6 +4,9 @@
 * :class:`SafeSpace` — the map and margin a trajectory keeps outside the legs out of the
   margin; :func:`trajectory_margins` measures the margin kept, exactly.
 * :class:`Trajectory` — a piecewise polynomial per axis with a yaw reference.
+* :class:`Reference` — what the simulation flies: a Trajectory or anything else with a
+  position, velocity, acceleration and yaw over time (built-in shapes in
+  :mod:`.references`, samples read from a file in :mod:`.sampled`).
 * Generators ``(waypoints (N, 3), segment times (N - 1,)) -> Trajectory``:
   :func:`minimum_snap`, :func:`minimum_snap_qp`, :func:`quintic_segments`,
   :func:`quintic_c2`, :func:`quintic_average`, :func:`cubic_spline`.
@@ -20,8 +23,9 @@ from quadnav.trajectory.generate import (
 )
 from quadnav.trajectory.minsnap import minimum_snap, snap_cost
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
-from quadnav.trajectory.model import Samples, Trajectory, YawMode, ppoly_from_ascending
+from quadnav.trajectory.model import Trajectory, YawMode, ppoly_from_ascending
 from quadnav.trajectory.quintic import quintic_average, quintic_c2, quintic_segments
+from quadnav.trajectory.reference import Reference, Samples
 from quadnav.trajectory.space import SafeSpace, trajectory_margins
 
 __all__ = [
@@ -29,6 +33,7 @@ __all__ = [
     "TIMINGS",
     "FeasibilityReport",
     "Limits",
+    "Reference",
     "SafeSpace",
     "Samples",
     "Trajectory",

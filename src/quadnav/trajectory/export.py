@@ -1,9 +1,11 @@
-"""A trajectory sampled to text: a plain CSV table, and the course's ``MP.csv`` layout.
+"""A reference sampled to text: a plain CSV table, and the course's ``MP.csv`` layout.
 
 Numbers are written with ``%.9g`` (nine significant digits: below a micrometre for
 positions up to 100 m, and a microsecond for times up to 1000 s), comma-separated, one
-line per row ending in ``\\n``. Samples are those of :meth:`Trajectory.sample`: every
-``dt`` s from 0 and the end time.
+line per row ending in ``\\n``. The table's samples are those of ``reference.sample(dt)``:
+every ``dt`` s from 0 and the end time; MP.csv, which has no times, is sampled at exactly
+``k dt`` (:func:`~quadnav.trajectory.reference.grid_times`), so that its columns are
+uniform and :mod:`quadnav.trajectory.sampled` reads it back exactly.
 """
 
 from __future__ import annotations
@@ -14,19 +16,25 @@ import math
 import numpy as np
 
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.model import FloatArray, Samples, Trajectory
+from quadnav.trajectory.reference import (
+    FloatArray,
+    Reference,
+    grid_times,
+    samples_at,
+)
 
 #: Header of :func:`trajectory_csv`: time s, position m, velocity m/s, acceleration
 #: m/s^2, yaw rad.
 CSV_HEADER = "t,x,y,z,vx,vy,vz,ax,ay,az,yaw"
 #: Number format of every value written.
 NUMBER_FORMAT = "%.9g"
+#: Rows of :func:`mp_csv`, top to bottom.
+MP_ROWS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az")
 
 
-def _samples(trajectory: Trajectory, dt: float) -> Samples:
+def _check_interval(dt: float) -> None:
     if not (math.isfinite(dt) and dt > 0):
         raise QuadnavError(f"sample interval dt must be a finite number > 0 s, got {dt}")
-    return trajectory.sample(dt)
 
 
 def csv_table(rows: FloatArray, header: str = "") -> str:
@@ -36,17 +44,21 @@ def csv_table(rows: FloatArray, header: str = "") -> str:
     return buffer.getvalue()
 
 
-def trajectory_csv(trajectory: Trajectory, dt: float) -> str:
-    """The trajectory sampled every ``dt`` s as CSV text: the header :data:`CSV_HEADER`,
-    then one row per sample ``t, x, y, z, vx, vy, vz, ax, ay, az, yaw`` (SI units, rad)."""
-    s = _samples(trajectory, dt)
+def trajectory_csv(reference: Reference, dt: float) -> str:
+    """The reference sampled every ``dt`` s (and at its end) as CSV text: the header
+    :data:`CSV_HEADER`, then one row per sample ``t, x, y, z, vx, vy, vz, ax, ay, az, yaw``
+    (SI units, rad)."""
+    _check_interval(dt)
+    s = reference.sample(dt)
     return csv_table(np.column_stack([s.t, s.position, s.velocity, s.acceleration, s.yaw]),
-                  CSV_HEADER)
+                     CSV_HEADER)
 
 
-def mp_csv(trajectory: Trajectory, dt: float) -> str:
-    """The trajectory sampled every ``dt`` s in the course's ``MP.csv`` layout: no header,
-    9 rows ``px, py, pz, vx, vy, vz, ax, ay, az`` (m, m/s, m/s^2) and one column per
-    sample (times are implied: ``k * dt``, the last column the end time)."""
-    s = _samples(trajectory, dt)
+def mp_csv(reference: Reference, dt: float) -> str:
+    """The reference in the course's ``MP.csv`` layout: no header, the 9 rows
+    :data:`MP_ROWS` (m, m/s, m/s^2) and one column per sample, at exactly ``k dt`` s for
+    k = 0 .. ceil(duration / dt) (the times are implied by the column number; past the
+    end the reference holds still, so the last column is the end state)."""
+    _check_interval(dt)
+    s = samples_at(reference, grid_times(reference.duration, dt))
     return csv_table(np.vstack([s.position.T, s.velocity.T, s.acceleration.T]))

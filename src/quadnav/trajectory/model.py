@@ -15,12 +15,10 @@ from enum import Enum
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
-from quadnav.limits import MAX_SAMPLES, check_count
-
-FloatArray = NDArray[np.float64]
+from quadnav.trajectory.reference import FloatArray, Sampling
 
 #: Below this horizontal speed, m/s, a travel-facing yaw follows the current segment's
 #: direction instead of the velocity.
@@ -44,21 +42,10 @@ def ppoly_from_ascending(coefficients: ArrayLike, breaks: ArrayLike) -> PPoly:
     return PPoly(np.ascontiguousarray(c.transpose(1, 0, 2)[::-1]), np.asarray(breaks, float))
 
 
-@dataclass(frozen=True)
-class Samples:
-    """A trajectory sampled at times ``t`` (N,) s: position, velocity, acceleration (N, 3)
-    in m, m/s, m/s^2 and yaw (N,) rad."""
-
-    t: FloatArray
-    position: FloatArray
-    velocity: FloatArray
-    acceleration: FloatArray
-    yaw: FloatArray
-
-
 @dataclass(frozen=True, eq=False)
-class Trajectory:
-    """A smooth reference through waypoints.
+class Trajectory(Sampling):
+    """A smooth reference through waypoints (a
+    :class:`~quadnav.trajectory.reference.Reference`).
 
     Attributes:
         poly: position as a vector-valued PPoly of time (s -> m, 3 axes); its breaks are
@@ -183,23 +170,6 @@ class Trajectory:
         direction = np.where(fast[..., None], velocity[..., :2], chord[..., :2])
         flat = np.hypot(direction[..., 0], direction[..., 1]) == 0
         return np.where(flat, self.yaw0, np.arctan2(direction[..., 1], direction[..., 0]))
-
-    def sample(self, dt: float) -> Samples:
-        """Samples every ``dt`` s from 0 to the end (the end included).
-
-        Raises:
-            QuadnavError: more than :data:`~quadnav.limits.MAX_SAMPLES` samples.
-        """
-        if not dt > 0:
-            raise ValueError(f"dt must be > 0 s, got {dt}")
-        count = self.duration / dt + 1
-        check_count(count, MAX_SAMPLES, f"a {self.duration:.6g} s trajectory sampled every "
-                    f"{dt:g} s gives samples", "sample less often (--dt) or raise the speed")
-        count = int(np.floor(self.duration / dt + 1e-9)) + 1
-        t = np.arange(count) * dt
-        if t[-1] < self.duration:
-            t = np.append(t, self.duration)
-        return Samples(t, self.position(t), self.velocity(t), self.acceleration(t), self.yaw(t))
 
 
 def hold_trajectory(position: ArrayLike, duration: float, yaw: float = 0.0) -> Trajectory:

@@ -34,12 +34,13 @@ _JERK_SNAP = np.vstack([derivative_rows(6, order, tau)
                         for tau in (0.0, 1.0) for order in (3, 4)]) @ _HERMITE
 
 
-def _hermite(states: FloatArray, durations: FloatArray, method: str, info: dict
-             ) -> Trajectory:
-    """The trajectory whose segment ``i`` joins ``states[i]`` to ``states[i + 1]``.
+def hermite_trajectory(states: FloatArray, durations: FloatArray, method: str, info: dict
+                       ) -> Trajectory:
+    """The trajectory whose segment ``i`` joins ``states[i]`` to ``states[i + 1]``: the
+    quintic Hermite interpolation of the states, exact at the waypoints.
 
     ``states`` (N, 3, 3) holds position, velocity and acceleration (m, m/s, m/s^2) at each
-    waypoint; ``durations`` (N - 1,) s.
+    waypoint; ``durations`` (N - 1,) s, each > 0.
     """
     powers = durations[:, None] ** np.arange(3)  # (segments, 3): 1, T, T^2
     ends = np.concatenate([states[:-1] * powers[:, :, None], states[1:] * powers[:, :, None]],
@@ -85,7 +86,7 @@ def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float
     states = np.zeros((len(points), 3, 3))
     states[:, 0] = points
     states[1:-1, 1] = speeds[:, None] * (directions[:-1] + directions[1:]) / 2
-    return _hermite(states, durations, "quintic", {"cruise_speed": float(cruise_speed)})
+    return hermite_trajectory(states, durations, "quintic", {"cruise_speed": float(cruise_speed)})
 
 
 def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
@@ -109,7 +110,7 @@ def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     states = np.zeros((len(points), 3, 3))
     states[:, 0] = points
     states[1:-1, 1] = (average[:-1] + average[1:]) / 2
-    return _hermite(states, durations, "quintic-average", {})
+    return hermite_trajectory(states, durations, "quintic-average", {})
 
 
 def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
@@ -139,7 +140,7 @@ def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     if interior:
         velocity_acceleration = _solve_interior(points, durations)  # (interior, 2, 3)
         states[1:-1, 1:] = velocity_acceleration
-    return _hermite(states, durations, "quintic-c2", {})
+    return hermite_trajectory(states, durations, "quintic-c2", {})
 
 
 def _solve_interior(points: FloatArray, durations: FloatArray) -> FloatArray:

@@ -88,3 +88,15 @@ def from_rotation_vector(v: np.ndarray) -> np.ndarray:
         return q / np.linalg.norm(q)
     s = math.sin(0.5 * angle) / angle
     return np.array([math.cos(0.5 * angle), s * v[0], s * v[1], s * v[2]])
+
+
+def euler_angles(q: np.ndarray) -> np.ndarray:
+    """Roll, pitch and yaw, rad (Z-Y-X: yaw about world z, then pitch, then roll), of
+    unit quaternions (N, 4) -> (N, 3); pitch in [-pi/2, pi/2], roll and yaw in
+    (-pi, pi]. Plain numpy, for figures of whole flights."""
+    w, x, y, z = np.asarray(q, dtype=np.float64).T
+    return np.column_stack([
+        np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y)),
+        np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0)),
+        np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+    ])

@@ -100,16 +100,18 @@ def _scene(run: Run, size: tuple[float, float], dpi: float
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_axes((0.0, 0.08, 1.0, 0.84), projection="3d")
     handles = draw_world(ax, world, world.start, world.goal)
-    handles += ax.plot(*run.path.T, color=PATH_COLOR, linewidth=1.4, linestyle="--",
-                       zorder=20, path_effects=outlined(1.4), label="path")
+    if run.path is not None:
+        handles += ax.plot(*run.path.T, color=PATH_COLOR, linewidth=1.4, linestyle="--",
+                           zorder=20, path_effects=outlined(1.4), label="path")
     handles += ax.plot(*run.trajectory.position.T, color=TRAJECTORY_COLOR, linewidth=2.0,
-                       alpha=0.6, zorder=21, label="trajectory")
+                       alpha=0.6, zorder=21,
+                       label="reference" if run.is_track else "trajectory")
     handles += [Line2D([], [], color=FLOWN_COLOR, linewidth=1.6, label="flown"),
                 Line2D([], [], color=DRONE_COLOR, marker="o", linewidth=2.5,
                        label="drone (enlarged)")]
     ax.view_init(elev=30, azim=-60)
     map_legend(fig, world, handles, loc="lower left", ncol=4, frameon=False)
-    fig.suptitle(f"{metrics['map']}\n{run_outcome(metrics)}", fontsize=9)
+    fig.suptitle(f"{run.title}\n{run_outcome(metrics)}", fontsize=9)
     finish(fig)
     canvas.draw()
     image = np.array(canvas.buffer_rgba())

@@ -1,6 +1,7 @@
-"""Figures of a run folder read back (:class:`~quadnav.report.rundir.Run`): the run over
-the map (in 3D and from above), desired against actual states, and the position tracking
-error against time. Legends stand outside the plots.
+"""Figures of a run folder read back (:class:`~quadnav.report.rundir.Run`, of ``quadnav
+fly`` or ``quadnav track``): the run over the map (in 3D and from above), desired against
+actual states (with a step's response marked), the position tracking error against time,
+and the attitude and motor commands. Legends stand outside the plots.
 
 Every consumer (``quadnav fly``, the report, the viewer) draws from the files a run
 wrote, so a figure always shows what the folder holds.
@@ -15,9 +16,12 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from quadnav.report.rundir import FIGURES, FlightTable, Run
 from quadnav.sim.flight import Ending
+from quadnav.sim.step_response import SETTLING_BAND
+from quadnav.vehicle.quaternion import euler_angles
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import map_legend
 from quadnav.viz.plan_figure import draw_tree
@@ -25,7 +29,10 @@ from quadnav.viz.style import (
     AXIS_COLORS,
     COLLISION_COLOR,
     FLOWN_COLOR,
+    MOTOR_COLORS,
+    MOTOR_STYLES,
     PATH_COLOR,
+    STEP_COLOR,
     TRAJECTORY_COLOR,
     outlined,
 )
@@ -41,12 +48,14 @@ SMALL_FONT = 9
 TITLE_FONT = 10
 #: Height of the tracking error plot over the largest error, for the note.
 HEADROOM = 1.15
+#: Least height of an attitude plot's y range, degrees.
+MIN_ANGLE_SPAN = 2.0
 
 
 def run_outcome(metrics: dict) -> str:
     """``success``, or why the run failed (from metrics.json): no path, the flight's ending
-    and when, or the goal missed."""
-    if not metrics["path_found"]:
+    and when, or the goal (a track: the reference's end) missed."""
+    if not metrics.get("path_found", True):
         return "no path"
     if metrics["success"]:
         return "success"
@@ -72,7 +81,8 @@ def _draw_run(ax: Axes, run: Run) -> list:
     if run.trajectory is not None:
         handles += plot_points(ax, run.trajectory.position, color=TRAJECTORY_COLOR,
                                linewidth=2.6, alpha=0.85, zorder=21,
-                               label=f"trajectory ({run.trajectory.t[-1]:.2f} s)")
+                               label=f"{'reference' if run.is_track else 'trajectory'} "
+                                     f"({run.trajectory.t[-1]:.2f} s)")
     if flight is not None:
         handles += plot_points(ax, flight.position, color=FLOWN_COLOR, linewidth=1.0,
                                zorder=22, label=f"flown ({flight.t[-1]:.2f} s)")
@@ -88,9 +98,9 @@ def _draw_run(ax: Axes, run: Run) -> list:
 def flight_3d_figure(run: Run) -> Figure:
     """The map, the explored tree, the path (red, dashed, outlined), the trajectory and
     the flown track seen obliquely (3D) and from above (2D, to scale), a cross where a
-    collision stopped the flight, one legend below both; the title gives the map, the
-    outcome, the RMS tracking error and the top speed. A run without a path shows the
-    map and the tree."""
+    collision stopped the flight, one legend below both; the title gives the map (a
+    track: the reference), the outcome, the RMS tracking error and the top speed (not
+    for a track). A run without a path shows the map and the tree."""
     metrics = run.metrics
     fig, oblique, top = two_views(run.world, (12, 7))
     handles = _draw_run(oblique, run)
@@ -99,9 +109,10 @@ def flight_3d_figure(run: Run) -> Figure:
                fontsize=SMALL_FONT)
     summary = run_outcome(metrics)
     if run.flight is not None:
-        summary += (f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm, "
-                    f"top speed {metrics['speed_m_s']:g} m/s")
-    fig.suptitle(f"{metrics['map']}\n{summary}", fontsize=TITLE_FONT)
+        summary += f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm"
+        if not run.is_track:
+            summary += f", top speed {metrics['speed_m_s']:g} m/s"
+    fig.suptitle(f"{run.title}\n{summary}", fontsize=TITLE_FONT)
     return finish(fig)
 
 
@@ -119,44 +130,107 @@ def _flight(run: Run) -> FlightTable:
     return run.flight
 
 
+def _desired(run: Run, name: str) -> np.ndarray:
+    """trajectory.csv's column(s) ``name`` (a field of
+    :class:`~quadnav.trajectory.reference.Samples`: (N,) or (N, 3)) at the flight's sample
+    times, linearly interpolated (held at the last after its end)."""
+    flight, trajectory = _flight(run), run.trajectory
+    values = getattr(trajectory, name)
+    if values.ndim == 1:
+        return np.interp(flight.t, trajectory.t, values)
+    return np.column_stack([np.interp(flight.t, trajectory.t, column) for column in values.T])
+
+
 def desired_velocity(run: Run) -> np.ndarray:
     """(N, 3) the reference velocity at the flight's sample times, m/s: trajectory.csv's
     velocity linearly interpolated (held at its last value, rest, after its end)."""
-    flight, trajectory = _flight(run), run.trajectory
-    return np.column_stack([np.interp(flight.t, trajectory.t, trajectory.velocity[:, axis])
-                            for axis in range(3)])
+    return _desired(run, "velocity")
+
+
+def desired_acceleration(run: Run) -> np.ndarray:
+    """(N, 3) the reference acceleration at the flight's sample times, m/s^2, as
+    :func:`desired_velocity`."""
+    return _desired(run, "acceleration")
+
+
+def actual_acceleration(flight: FlightTable) -> np.ndarray:
+    """(N, 3) the flown acceleration, m/s^2: the recorded velocity's finite differences
+    (second order, at the possibly uneven sample times)."""
+    if len(flight.t) < 2:
+        return np.zeros_like(flight.velocity)
+    return np.gradient(flight.velocity, flight.t, axis=0)
 
 
 def flight_states_figure(run: Run) -> Figure:
-    """Desired (dashed) against actual (solid) position and velocity per axis against
-    time: rows x, y, z; columns position (m), velocity (m/s); one legend below. The
-    desired position is flight.csv's reference, the desired velocity
-    :func:`desired_velocity`."""
+    """Desired (dashed) against actual (solid) position, velocity and acceleration per
+    axis against time: rows x, y, z; columns position (m), velocity (m/s), acceleration
+    (m/s^2); one legend below. The desired position is flight.csv's reference, the desired
+    velocity and acceleration trajectory.csv's (:func:`desired_velocity`); the actual
+    acceleration is :func:`actual_acceleration`. A step's response is marked on its
+    axis (:func:`_mark_step`)."""
     flight = _flight(run)
-    fig, axes = plt.subplots(3, 2, figsize=(11, 8), dpi=120, sharex=True,
+    fig, axes = plt.subplots(3, 3, figsize=(13, 8), dpi=120, sharex=True,
                              layout="constrained")
-    columns = (("position", "m", flight.reference, flight.position),
-               ("velocity", "m/s", desired_velocity(run), flight.velocity))
-    for column, (name, unit, desired, actual) in enumerate(columns):
+    columns = (("position", "", "m", flight.reference, flight.position),
+               ("velocity", "v", "m/s", desired_velocity(run), flight.velocity),
+               ("acceleration", "a", "m/s²", desired_acceleration(run),
+                actual_acceleration(flight)))
+    for column, (name, prefix, unit, desired, actual) in enumerate(columns):
         for axis, color in enumerate(AXIS_COLORS):
             ax = axes[axis, column]
             ax.plot(flight.t, desired[:, axis], color="0.1", linestyle="--", linewidth=1.0,
                     label="desired", zorder=3)  # dashed over the actual, so both show
             ax.plot(flight.t, actual[:, axis], color=color, linewidth=1.6, label="actual")
             _widen(ax, MIN_SPAN)
-            symbol = "xyz"[axis]
-            ax.set_ylabel(f"{symbol if column == 0 else 'v' + symbol} ({unit})")
+            ax.set_ylabel(f"{prefix}{'xyz'[axis]} ({unit})")
             ax.grid(alpha=0.3)
         axes[0, column].set_title(name, fontsize=TITLE_FONT)
         axes[-1, column].set_xlabel("time (s)")
-    fig.legend(handles=[Line2D([], [], color="0.1", linestyle="--", linewidth=1.0,
-                               label="desired"),
-                        *(Line2D([], [], color=color, linewidth=1.6, label=f"actual {name}")
-                          for name, color in zip("xyz", AXIS_COLORS, strict=True))],
-               loc="outside lower center", ncol=4, fontsize=SMALL_FONT)
+    handles = [Line2D([], [], color="0.1", linestyle="--", linewidth=1.0, label="desired"),
+               *(Line2D([], [], color=color, linewidth=1.6, label=f"actual {name}")
+                 for name, color in zip("xyz", AXIS_COLORS, strict=True))]
+    handles += _mark_step(axes[:, 0], run.metrics)
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=SMALL_FONT)
     fig.suptitle(f"desired and actual states: {run.metrics['ending']} after "
                  f"{flight.t[-1]:.2f} s", fontsize=TITLE_FONT)
     return finish(fig)
+
+
+def _mark_step(position_axes: np.ndarray, metrics: dict) -> list:
+    """On the position plot of a step's axis (``position_axes``: x, y, z), the settling
+    band about the target (shaded), where it settled (a dotted line) and the peak (a
+    dot); returns their legend handles, which give the step metrics (none but for a
+    step)."""
+    if "overshoot_percent" not in metrics:
+        return []
+    axis = "xyz".index(metrics["step_axis"])
+    ax, size = position_axes[axis], metrics["step_size_m"]
+    target, band = metrics["goal"][axis], SETTLING_BAND * abs(size)
+    ax.axhspan(target - band, target + band, color=STEP_COLOR, alpha=0.25, linewidth=0,
+               zorder=1)
+    handles = [Patch(color=STEP_COLOR, alpha=0.25,
+                     label=f"{100 * SETTLING_BAND:g} % band about the target")]
+    line = next(line for line in ax.get_lines() if line.get_label() == "actual")
+    t, x = line.get_xdata(), line.get_ydata()
+    along = np.where(t >= metrics["step_time_s"], np.sign(size) * x, -np.inf)
+    peak = int(np.argmax(along))  # the farthest along the step, after it
+    ax.plot(t[peak], x[peak], marker="o", color=STEP_COLOR, markeredgecolor="black",
+            linestyle="", zorder=4)
+    handles.append(Line2D([], [], marker="o", color=STEP_COLOR, markeredgecolor="black",
+                          linestyle="", label=f"peak: overshoot "
+                                              f"{metrics['overshoot_percent']:.2f} %"))
+    settling = metrics["settling_time_s"]
+    if settling is not None:
+        settled = metrics["step_time_s"] + settling
+        ax.axvline(settled, color=STEP_COLOR, linestyle=":", linewidth=1.4, zorder=2)
+        handles.append(Line2D([], [], color=STEP_COLOR, linestyle=":", linewidth=1.4,
+                              label=f"settled at {settled:.2f} s ({settling:.2f} s after "
+                                    "the step)"))
+    rise = metrics["rise_time_s"]
+    handles.append(Line2D([], [], linestyle="", label=(
+        f"rise (10-90 %) {'-' if rise is None else f'{rise:.2f} s'}, steady-state error "
+        f"{CM_PER_M * metrics['steady_state_error_m']:.2f} cm")))
+    return handles
 
 
 def tracking_error(flight: FlightTable) -> np.ndarray:
@@ -195,10 +269,43 @@ def tracking_error_figure(run: Run) -> Figure:
     return finish(fig)
 
 
+def attitude_motors_figure(run: Run) -> Figure:
+    """Roll, pitch and yaw (degrees, from flight.csv's attitude; the yaw reference of
+    trajectory.csv dashed) and the four motor commands (in [0, 1]) against time, one
+    legend below."""
+    flight = _flight(run)
+    fig, axes = plt.subplots(4, 1, figsize=(11, 9), dpi=120, sharex=True,
+                             layout="constrained")
+    angles = np.degrees(euler_angles(flight.attitude))
+    angles[:, 2] = np.degrees(np.unwrap(np.radians(angles[:, 2])))
+    reference_yaw = np.degrees(np.unwrap(_desired(run, "yaw")))
+    for ax, name, values, color in zip(axes, ("roll", "pitch", "yaw"), angles.T, AXIS_COLORS,
+                                       strict=False):
+        ax.plot(flight.t, values, color=color, linewidth=1.4, label=f"actual {name}")
+        ax.set_ylabel(f"{name} (deg)")
+        ax.grid(alpha=0.3)
+        _widen(ax, MIN_ANGLE_SPAN)
+    axes[2].plot(flight.t, reference_yaw, color="0.1", linestyle="--", linewidth=1.0,
+                 label="yaw reference", zorder=3)
+    _widen(axes[2], MIN_ANGLE_SPAN)
+    for motor, (color, style) in enumerate(zip(MOTOR_COLORS, MOTOR_STYLES, strict=True)):
+        axes[3].plot(flight.t, flight.commands[:, motor], color=color, linestyle=style,
+                     linewidth=1.2, label=f"motor {motor + 1}")
+    axes[3].set_ylim(-0.05, 1.05)
+    axes[3].set_ylabel("motor command")
+    axes[3].set_xlabel("time (s)")
+    axes[3].grid(alpha=0.3)
+    handles = [handle for ax in axes for handle in ax.get_legend_handles_labels()[0]]
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=SMALL_FONT)
+    fig.suptitle(f"attitude and motor commands: {run.metrics['ending']} after "
+                 f"{flight.t[-1]:.2f} s", fontsize=TITLE_FONT)
+    return finish(fig)
+
+
 def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
     """The figures ``run`` has, by their file name in the run folder, in the order of
-    :data:`~quadnav.report.rundir.FIGURES`: the 3D view always, the states and the
-    tracking error when there was a flight."""
+    :data:`~quadnav.report.rundir.FIGURES`: the 3D view always, the states, the tracking
+    error and the attitude and motors when there was a flight."""
     makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
-                                tracking_error_figure), strict=True))
+                                tracking_error_figure, attitude_motors_figure), strict=True))
     return makers if run.flight is not None else {FIGURES[0]: flight_3d_figure}

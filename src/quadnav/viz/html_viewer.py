@@ -69,7 +69,7 @@ def viewer_data(run: Run) -> dict:
     None for a run that found no path."""
     world, edges = run.world, run.tree_edges()
     data = {
-        "title": run.metrics.get("map") or world.name,
+        "title": run.title,
         "subtitle": _subtitle(run.metrics),
         "boundary": _numbers(world.boundary),
         "blocks": _numbers(world.blocks),

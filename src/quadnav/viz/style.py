@@ -18,6 +18,11 @@ DRONE_COLOR = "tab:purple"
 DRONE_SCALE = 0.03
 #: x, y, z.
 AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
+#: Motors 1 to 4: colours, and line styles that keep two equal commands both visible.
+MOTOR_COLORS = ("tab:purple", "tab:orange", "tab:olive", "tab:cyan")
+MOTOR_STYLES = ("-", "--", "-.", ":")
+#: Marks of a step response.
+STEP_COLOR = "tab:purple"
 #: Widths, points, of the two edges of an outlined line: white inside, black outside.
 OUTLINE_WIDTHS = (1.0, 0.8)
 

@@ -29,7 +29,7 @@ AXES = "xyz"
 
 
 def read_file(path: str | Path) -> bytes:
-    """The bytes of a map, start/goal or path file; MapError if it cannot be read or is
+    """The bytes of a map, start/goal, path or reference file; MapError if it cannot be read or is
     over :data:`~quadnav.limits.MAX_FILE_BYTES`."""
     try:
         with Path(path).open("rb") as file:
@@ -43,7 +43,7 @@ def read_file(path: str | Path) -> bytes:
 def _check_size(size: int, source: str) -> None:
     if size > MAX_FILE_BYTES:
         raise MapError(source, f"the file is over {MAX_FILE_BYTES // 2**20} MiB: expected "
-                       "a smaller map, start/goal or path file")
+                       "a smaller map, start/goal, path or reference file")
 
 
 def decode_text(data: bytes, source: str) -> str:

@@ -16,14 +16,18 @@ the same world. Every built world
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from quadnav.errors import MapError
+from quadnav.specs import (
+    ParamInfo,
+    SpecError,
+    SpecInfo,
+    describe_params,
+    parse_spec,
+)
 from quadnav.world.builtin import empty, forest, maze, window
 from quadnav.world.builtin.base import Generator, Layout
-from quadnav.world.builtin.params import SpecError, format_values, parse_values
 from quadnav.world.connectivity import connected, default_resolution
 from quadnav.world.model import World
 
@@ -31,7 +35,7 @@ __all__ = [
     "DEFAULT_MARGIN",
     "DEFAULT_WORLD_SPEC",
     "ParamInfo",
-    "WorldInfo",
+    "SpecInfo",
     "build_world",
     "describe_worlds",
     "is_builtin_spec",
@@ -50,54 +54,15 @@ _GENERATORS: dict[str, Generator] = {
 }
 
 
-@dataclass(frozen=True)
-class ParamInfo:
-    """A parameter as ``quadnav worlds`` shows it; every field is display text.
-
-    Attributes:
-        name: the key in a spec, e.g. ``size``.
-        type: ``int``, ``float``, ``WxDxH`` or ``NxM``.
-        default: the default as written in a spec, e.g. ``20x20x6``.
-        help: one line, with units.
-        range: the values accepted (for each part of a size or grid), e.g.
-            ``from 2 to 10,000 m``.
-    """
-
-    name: str
-    type: str
-    default: str
-    help: str
-    range: str
-
-
-@dataclass(frozen=True)
-class WorldInfo:
-    """A built-in world as ``quadnav worlds`` shows it.
-
-    Attributes:
-        name: the world's name.
-        summary: one line saying what it looks like.
-        params: its parameters, in canonical order.
-    """
-
-    name: str
-    summary: str
-    params: tuple[ParamInfo, ...]
-
-
 def world_names() -> list[str]:
     """Names of the built-in worlds."""
     return list(_GENERATORS)
 
 
-def describe_worlds() -> list[WorldInfo]:
+def describe_worlds() -> list[SpecInfo]:
     """Every built-in world with a summary and its parameters."""
     return [
-        WorldInfo(g.name, g.summary, tuple(
-            ParamInfo(p.name, p.kind.label, p.format(p.default), p.help,
-                      ("each " if p.kind.parts > 1 else "") + p.range.describe())
-            for p in g.params))
-        for g in _GENERATORS.values()
+        SpecInfo(g.name, g.summary, describe_params(g.params)) for g in _GENERATORS.values()
     ]
 
 
@@ -122,9 +87,7 @@ def build_world(spec: str) -> World:
         raise MapError(spec, f"unknown built-in world {name!r} "
                        f"(known: {', '.join(_GENERATORS)})")
     try:
-        defaults = {p.name: p.default for p in generator.params}
-        values = parse_values(generator.params, rest) if colon else defaults
-        canonical = f"{name}:{format_values(generator.params, values)}"
+        canonical, values = parse_spec(name, generator.params, rest if colon else None)
         seed = values.get("seed", 0)
         for attempt in range(MAX_ATTEMPTS):
             layout = generator.layout(values, np.random.default_rng([seed, attempt]))

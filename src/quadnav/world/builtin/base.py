@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from quadnav.world.builtin.params import Param
+from quadnav.limits import COORDINATE, Range
+from quadnav.specs import Param
 
 FloatArray = NDArray[np.float64]
 
@@ -47,13 +48,18 @@ class Generator:
         summary: one line saying what the world looks like.
         params: its parameters, in the order the canonical spec lists them.
         layout: ``layout(values, rng) -> Layout``; may raise
-            :class:`~quadnav.world.builtin.params.SpecError` for values it cannot build.
+            :class:`~quadnav.specs.SpecError` for values it cannot build.
     """
 
     name: str
     summary: str
     params: tuple[Param, ...]
     layout: Callable[[dict[str, Any], np.random.Generator], Layout]
+
+
+def sizes(least: float) -> Range:
+    """The range of a map's side: ``least`` to the coordinate range's 10 km, metres."""
+    return Range(least, COORDINATE.high, "m")
 
 
 def corner_start_goal(size: Sequence[float]) -> tuple[FloatArray, FloatArray]:

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from quadnav.world.builtin.base import Generator, Layout, corner_start_goal
-from quadnav.world.builtin.params import SIZE, Param, sizes
+from quadnav.specs import SIZE, Param
+from quadnav.world.builtin.base import Generator, Layout, corner_start_goal, sizes
 
 
 def _layout(values: dict[str, Any], rng: np.random.Generator) -> Layout:

@@ -7,8 +7,15 @@ from typing import Any
 import numpy as np
 
 from quadnav.limits import Range
-from quadnav.world.builtin.base import Generator, Layout, corner_start_goal, plate_with_hole, shaded
-from quadnav.world.builtin.params import INT, SEED_PARAM, SIZE, Param, SpecError, sizes
+from quadnav.specs import INT, SEED_PARAM, SIZE, Param, SpecError
+from quadnav.world.builtin.base import (
+    Generator,
+    Layout,
+    corner_start_goal,
+    plate_with_hole,
+    shaded,
+    sizes,
+)
 
 WALL_COLOR = (0.75, 0.68, 0.55)
 #: Range of a wall's thickness (along y) and of a window's width and height, metres.
