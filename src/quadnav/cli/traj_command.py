@@ -54,9 +54,10 @@ def traj(args: argparse.Namespace) -> int:
     path = read_path_csv(args.path)
     shortest = path_length(path) / args.speed
     check_duration(shortest, "raise --speed", at_least=True)
-    check_count(shortest / args.dt + 1, MAX_SAMPLES, f"a trajectory of at least "
-                f"{shortest:.6g} s sampled every {args.dt:g} s gives samples",
-                "raise --dt or --speed")
+    finest = min(args.dt, args.mp_dt)
+    check_count(shortest / finest + 1, MAX_SAMPLES, f"a trajectory of at least "
+                f"{shortest:.6g} s sampled every {finest:g} s gives samples",
+                "raise --dt, --mp-dt or --speed")
     space = SafeSpace(world, resolve_margin(args, world))
     trajectory = make_trajectory(path, settings, space)
     check_duration(trajectory.duration, "raise --speed or --accel")
@@ -75,7 +76,7 @@ def traj(args: argparse.Namespace) -> int:
     }
     with replaced_folder(folder, TRAJ_FILES) as staging:
         for name, text in (("trajectory.csv", trajectory_csv(trajectory, args.dt)),
-                           ("MP.csv", mp_csv(trajectory, args.dt)),
+                           ("MP.csv", mp_csv(trajectory, args.mp_dt)),
                            ("trajectory.json", json.dumps(summary, indent=2) + "\n")):
             (staging / name).write_text(text)
         save_figure(trajectory_3d_figure(world, trajectory, path), staging / "trajectory.png")
@@ -113,13 +114,14 @@ def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--yaw", choices=[m.value for m in YawMode], default="constant",
                    help="yaw reference (default: constant)")
     p.add_argument("--dt", type=number_in(SAMPLE_INTERVAL), default=DEFAULT_DT, metavar="S",
-                   help=f"sample interval of the CSV files, {SAMPLE_INTERVAL.describe()} "
+                   help=f"sample interval of trajectory.csv, {SAMPLE_INTERVAL.describe()} "
                         f"(default: {DEFAULT_DT:g}); the trajectory may last at most "
-                        f"{MAX_DURATION:g} s and give at most {MAX_SAMPLES:,} samples. MP.csv "
-                        "has no times: the course's code plays one column every "
-                        f"{1 / COURSE_MP_RATE:g} s, so write it with --dt "
-                        f"{1 / COURSE_MP_RATE:g} for that code (quadnav track MP.csv --rate "
-                        "1/dt reads it back)")
+                        f"{MAX_DURATION:g} s and give at most {MAX_SAMPLES:,} samples")
+    p.add_argument("--mp-dt", type=number_in(SAMPLE_INTERVAL), default=1 / COURSE_MP_RATE,
+                   metavar="S",
+                   help="sample interval of MP.csv, which has no times: the course's code "
+                        f"plays one column every {1 / COURSE_MP_RATE:g} s, and quadnav track "
+                        f"reads one at that rate by default (default: {1 / COURSE_MP_RATE:g})")
     p.add_argument("-o", "--output", default="traj", metavar="DIR",
                    help="folder to write into, created if needed (default: traj)")
     p.set_defaults(handler=traj)
