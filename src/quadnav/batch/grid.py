@@ -210,7 +210,8 @@ class BatchSpec:
     def table(self) -> dict[str, Any]:
         """The spec as a TOML-like table with every path resolved and every default filled
         in; :func:`parse_spec` reads it back to this spec."""
-        maps = [{key: value for key, value in entry.__dict__.items() if value is not None}
+        maps = [{key: list(value) if isinstance(value, tuple) else value
+                 for key, value in entry.__dict__.items() if value is not None}
                 for entry in self.maps]
         return {
             "maps": maps, "seeds": list(self.seeds),

@@ -13,6 +13,7 @@ Images are embedded PNGs and the style inline (the report's, :mod:`quadnav.repor
 from __future__ import annotations
 
 import html
+import inspect
 import math
 import os
 from collections.abc import Sequence
@@ -20,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from quadnav import __version__
@@ -40,6 +42,11 @@ PANEL_COLUMNS = ("wind_x", "wind_y", "wind_z", "gusts", "spread", "planner", "ga
 DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking error (cm)", 100.0),
                  ("min_clearance_m", "least clearance from a block (m)", 1.0),
                  ("trajectory_duration_s", "trajectory duration (s)", 1.0))
+
+
+#: Matplotlib's way to lay box plots on their side (``vert`` before 3.10).
+HORIZONTAL = ({"orientation": "horizontal"}
+              if "orientation" in inspect.signature(Axes.boxplot).parameters else {"vert": False})
 
 
 def short_maps(names: Sequence[str]) -> dict[str, str]:
@@ -171,8 +178,8 @@ def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]) -> Figure:
                  if row[column] is not None and math.isfinite(row[column])] for key in keys]
         filled = [k for k, values in enumerate(data) if values]
         if filled:
-            ax.boxplot([data[k] for k in filled], positions=positions[filled], vert=False,
-                       widths=0.6, flierprops={"markersize": 3})
+            ax.boxplot([data[k] for k in filled], positions=positions[filled], widths=0.6,
+                       flierprops={"markersize": 3}, **HORIZONTAL)
         ax.set_xlabel(title, fontsize=SMALL_FONT)
         ax.tick_params(labelsize=SMALL_FONT)
         ax.grid(axis="x", alpha=0.3)
