@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 from batchtools import MISSIONS, rows_one_by_one, write_spec
+from clitools import assert_user_error, run_here
 
 from quadnav.batch.grid import read_spec
 from quadnav.batch.run import BatchRun
@@ -23,3 +24,11 @@ def test_a_batch_on_a_local_ray_gives_the_table_of_a_local_run(tmp_path):
     assert len(rows) == MISSIONS
     assert all(same_row(a, b) for a, b in zip(rows, rows_one_by_one(spec), strict=True))
 
+
+
+def test_a_ray_address_where_nothing_answers_is_one_line_and_nothing_is_written(tmp_path):
+    result = run_here("batch", "empty", "--seeds", "1", "--ray", "127.0.0.1:1", "-o",
+                      tmp_path / "out")
+
+    assert_user_error(result, "--ray 127.0.0.1:1: cannot reach the Ray cluster's head")
+    assert not (tmp_path / "out").exists()

@@ -29,6 +29,7 @@ import logging
 import multiprocessing
 import os
 import signal
+import socket
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from types import TracebackType
@@ -160,6 +161,24 @@ def _import_ray():
     return ray
 
 
+#: Seconds to wait for a Ray cluster's head to answer (``ray.init`` itself waits forever).
+CONNECT_TIMEOUT = 10.0
+
+
+def check_reachable(address: str) -> None:
+    """QuadnavError unless something answers at the ``HOST:PORT`` of ``address`` (a
+    ``ray://`` prefix allowed; ``auto`` and addresses without a port are left to Ray)."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+    except OSError as error:
+        reason = error.strerror or str(error) or type(error).__name__
+        raise QuadnavError(f"--ray {address}: cannot reach the Ray cluster's head: {reason}; "
+                           "start it with ray start --head") from None
+
+
 class RayExecutor(_Closing):
     """Jobs as Ray tasks on the cluster at ``address``, or on a local Ray of ``workers``
     CPUs started for the run when ``address`` is None (see the module docstring)."""
@@ -171,6 +190,8 @@ class RayExecutor(_Closing):
                                    "configure_logging": True}
         if address is None:
             options |= {"num_cpus": workers or cpu_count(), "include_dashboard": False}
+        else:
+            check_reachable(address)
         try:
             ray.init(address=address, **options)
         except (ConnectionError, RuntimeError, ValueError) as error:

@@ -11,6 +11,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from quadnav.batch.grid import BatchSpec, parse_spec, read_spec
+from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import rate
 from quadnav.cli.args import (
     acceleration,
@@ -66,38 +67,46 @@ def batch_spec(args: argparse.Namespace) -> BatchSpec:
 
 
 class _Progress:
-    """The progress bar of a batch: missions done, ETA and the running success rate."""
+    """What a batch says as it runs: one line once its workers are ready, then a progress
+    bar of the missions done, with the ETA and the running success rate."""
 
-    def __init__(self, run_rows: dict, todo: int, quiet: bool) -> None:
-        self.rows = run_rows
-        self.bar = tqdm(total=todo, desc="batch", unit="mission", disable=quiet,
-                        file=sys.stderr, dynamic_ncols=True)
+    def __init__(self, run: BatchRun, where: str, quiet: bool) -> None:
+        self.run = run
+        self.where = where
+        self.quiet = quiet
+        self.bar: tqdm | None = None
 
     def started(self, workers: int) -> None:
-        self.bar.set_description(f"batch ({workers} workers)")
+        run = self.run
+        print(f"{len(run.missions)} missions, {len(run.rows)} already in {run.folder}; flying "
+              f"{len(run.todo)} on {workers} {self.where.format(s='s' if workers > 1 else '')}",
+              flush=True)
+        self.bar = tqdm(total=len(run.todo), desc="batch", unit="mission", disable=self.quiet,
+                        file=sys.stderr, dynamic_ncols=True)
 
     def row(self, row: dict) -> None:
-        finished = rate(list(self.rows.values()))
+        finished = rate(list(self.run.rows.values()))
+        assert self.bar is not None
         self.bar.set_postfix_str(f"success {100 * finished['success_rate']:.1f} % of "
                                  f"{finished['n']}", refresh=False)
         self.bar.update(1)
 
     def close(self) -> None:
-        self.bar.close()
+        if self.bar is not None:
+            self.bar.close()
 
 
 def batch(args: argparse.Namespace) -> int:
     """Run the batch; exit 0 once every mission has a row, whatever the success rate."""
-    from quadnav.batch.run import BatchRun
-
     spec = batch_spec(args)
     folder = check_output_folder(args.output)
     run = BatchRun(spec, folder, restart=args.restart)
     done_before = len(run.rows)
-    print(f"{len(run.missions)} missions, {done_before} already in {folder}; flying "
-          f"{len(run.todo)}" + (f" on Ray ({args.ray or 'local'})" if args.ray is not None
-                                else ""), flush=True)
-    progress = _Progress(run.rows, len(run.todo), args.quiet)
+    where = ("local worker{s}" if args.ray is None else
+             f"CPU{{s}} of the Ray cluster at {args.ray}" if args.ray else "CPU{s} of a local Ray")
+    if not run.todo:
+        print(f"{len(run.missions)} missions, all already in {folder}")
+    progress = _Progress(run, where, args.quiet)
     began = time.perf_counter()
     try:
         written = run.run(workers=args.workers, ray=args.ray is not None,
@@ -109,15 +118,15 @@ def batch(args: argparse.Namespace) -> int:
               f"{folder / 'results.csv'}; run the same command again to resume",
               file=sys.stderr)
         return interrupted_exit_code(interrupt)
-    progress.close()
+    finally:
+        progress.close()
     seconds = time.perf_counter() - began
     overall = rate(run.finished)
-    flown = len(run.rows) - done_before
     print(f"{overall['successes']} of {overall['n']} missions reached the goal with no "
           f"contact: {100 * overall['success_rate']:.1f} % (95 % interval "
           f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
           f"{overall['errors']} refused")
-    print(f"flew {flown} missions in {seconds:.1f} s")
+    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
     print("wrote " + ", ".join(str(folder / name) for name in written))
     return 0
 
