@@ -128,18 +128,17 @@ def one_line(text: str) -> str:
     return text.replace("\r", " ").replace("\n", " ")
 
 
+#: The Python type of each column type.
+PYTHON_TYPES = {STR: str, FLOAT: float, INT: int, BOOL: bool}
+
+
 def _parse(text: str, kind: str) -> Any:
+    """A value of type ``kind`` from its CSV text (:func:`_text`)."""
     if text == "":
         return None
-    if kind == FLOAT:
-        return float(text)
-    if kind == INT:
-        return int(text)
-    if kind == BOOL:
-        if text not in ("true", "false"):
-            raise ValueError(f"expected true or false, got {text!r}")
-        return text == "true"
-    return text
+    if kind == BOOL and text not in ("true", "false"):
+        raise ValueError(f"expected true or false, got {text!r}")
+    return text == "true" if kind == BOOL else PYTHON_TYPES[kind](text)
 
 
 def csv_line(row: dict[str, Any]) -> str:
@@ -230,15 +229,7 @@ def write_parquet(rows: list[dict[str, Any]], path: Path) -> None:
 
 def _plain(value: Any, kind: str) -> Any:
     """``value`` as the plain Python type of its column (numpy scalars converted)."""
-    if value is None:
-        return None
-    if kind == FLOAT:
-        return float(value)
-    if kind == INT:
-        return int(value)
-    if kind == BOOL:
-        return bool(value)
-    return str(value)
+    return None if value is None else PYTHON_TYPES[kind](value)
 
 
 def same_row(a: dict[str, Any], b: dict[str, Any], ignore: Sequence[str] = WALL_TIME_COLUMNS
