@@ -117,6 +117,7 @@ def test_wilson_interval_matches_known_values():
     assert wilson_interval(0, 10)[0] == 0.0 and wilson_interval(0, 10)[1] == pytest.approx(
         0.27753, abs=1e-5)
     assert wilson_interval(50, 50) == (pytest.approx(0.92865, abs=1e-5), 1.0)
+    assert wilson_interval(10, 10)[1] == 1.0  # not 0.9999999999999999
 
 
 # ------------------------------------------------------------------------ a whole batch

@@ -16,6 +16,7 @@ import html
 import inspect
 import math
 import os
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -39,9 +40,11 @@ WIDTH = 9.0
 #: Grid values that give a heat map its panels (maps and speeds are its rows and columns).
 PANEL_COLUMNS = ("wind_x", "wind_y", "wind_z", "gusts", "spread", "planner", "gains")
 #: Distributions drawn: column, axis label, scale to the unit shown.
-DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking error (cm)", 100.0),
-                 ("min_clearance_m", "least clearance from a block (m)", 1.0),
-                 ("trajectory_duration_s", "trajectory duration (s)", 1.0))
+DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking\nerror (cm)", 100.0),
+                 ("min_clearance_m", "least clearance\nfrom a block (m)", 1.0),
+                 ("trajectory_duration_s", "trajectory\nduration (s)", 1.0))
+#: Characters per line of a group's label beside the box plots.
+LABEL_WIDTH = 42
 
 
 #: Matplotlib's way to lay box plots on their side (``vert`` before 3.10).
@@ -168,9 +171,11 @@ def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]) -> Figure:
     members: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
         members.setdefault(json_key(group_values(row)), []).append(row)
-    names = [labels.label(g) for g in labels.groups]
+    names = [textwrap.fill(labels.label(g), LABEL_WIDTH) for g in labels.groups]
     keys = list(members)
-    fig = Figure(figsize=(WIDTH, 1.2 + 0.28 * len(names) + 0.5), dpi=DPI, layout="constrained")
+    lines = max(name.count("\n") + 1 for name in names)
+    fig = Figure(figsize=(WIDTH, 1.0 + (0.12 + 0.16 * lines) * len(names)), dpi=DPI,
+                 layout="constrained")
     axes = fig.subplots(1, len(DISTRIBUTIONS), sharey=True)
     positions = np.arange(len(names))[::-1]
     for ax, (column, title, scale) in zip(axes, DISTRIBUTIONS, strict=True):
