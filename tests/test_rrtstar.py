@@ -211,3 +211,19 @@ def test_map_without_start_needs_one():
     world = World(boundary=BOUNDARY)
     with pytest.raises(QuadnavError, match="the map has no start"):
         make_problem(world, None, [1.0, 1.0, 1.0], 0.2)
+
+
+@pytest.mark.parametrize("chunk_seconds", [0.0, 1e9])
+def test_the_tree_does_not_depend_on_how_long_chunks_take(monkeypatch, chunk_seconds):
+    from quadnav.planning import rrtstar
+
+    world = load_world("window:size=4x6x3,walls=1")  # a seed where the tree used to differ
+    problem = make_problem(world, world.start, world.goal, world.margin)
+    settings = PlannerSettings(time_limit=60.0, improve_iterations=10_000, seed=1)
+    usual = plan(problem, settings)
+    assert len(usual.tree_nodes) > 4096  # the arrays grew at least once
+    # chunks that never double (every chunk "slow"), or that always do
+    monkeypatch.setattr(rrtstar, "CHUNK_SECONDS", chunk_seconds)
+    other = plan(problem, settings)
+    assert np.array_equal(other.tree_nodes, usual.tree_nodes)
+    assert np.array_equal(other.path, usual.path)

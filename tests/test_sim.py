@@ -137,3 +137,19 @@ def test_bad_settings_are_user_errors(changes, message):
 
     with pytest.raises(QuadnavError, match=message):
         SimSettings(**changes)
+
+
+def test_a_heavier_plant_than_the_controller_knows_lags_more_but_still_flies():
+    trajectory = _straight([0.0, 0.0, 1.0], [4.0, 0.0, 2.0], speed=2.0)
+    nominal = simulate(trajectory, TELLO)
+    heavier = TELLO.replace(mass=1.3 * TELLO.mass, drag=1.5 * TELLO.drag)
+    unaware = simulate(trajectory, heavier, model=TELLO)
+    aware = simulate(trajectory, heavier)
+
+    assert nominal.ending is unaware.ending is aware.ending is Ending.COMPLETED
+    assert np.linalg.norm(unaware.position[-1] - [4.0, 0.0, 2.0]) < 0.1
+    # the controller that believes the nominal mass lags behind: its thrust feed-forward
+    # is short of the weight until the integrators make up for it
+    assert unaware.rms_tracking_error > 1.5 * nominal.rms_tracking_error
+    assert unaware.rms_tracking_error > aware.rms_tracking_error
+    assert np.array_equal(simulate(trajectory, TELLO, model=TELLO).states, nominal.states)

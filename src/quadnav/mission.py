@@ -69,9 +69,12 @@ class MissionSettings:
             the vehicle can follow on the path: its own limits
             (:func:`~quadnav.sim.envelope.vehicle_limits`), lowered until every limit
             holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
-        vehicle: the simulated quadrotor.
+        vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the controller.
         sim: rates, stopping and success rules, disturbances, seed.
+        plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
+            ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
+            its model, unaware of the difference.
     """
 
     planner: str = "rrtstar"
@@ -82,6 +85,12 @@ class MissionSettings:
     vehicle: VehicleParams = field(default_factory=load_params)
     gains: Gains = field(default_factory=Gains)
     sim: SimSettings = field(default_factory=SimSettings)
+    plant: VehicleParams | None = None
+
+    @property
+    def flown_vehicle(self) -> VehicleParams:
+        """The vehicle that really flies: ``plant``, else ``vehicle``."""
+        return self.plant or self.vehicle
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,8 +123,9 @@ class Mission:
 
     def parameters(self) -> dict:
         """Every setting the mission ran with, JSON-ready: the query, planner, trajectory,
-        vehicle, gains and simulation settings."""
+        vehicle, gains and simulation settings, and the plant when it is not the vehicle."""
         problem = self.problem
+        plant = {} if self.settings.plant is None else {"plant": as_plain(self.settings.plant)}
         return {
             "map": problem.world.name, "start": problem.start.tolist(),
             "goal": problem.goal.tolist(), "margin_m": problem.margin,
@@ -125,7 +135,7 @@ class Mission:
             "vehicle": as_plain(self.settings.vehicle),
             "gains": as_plain(self.settings.gains),
             "simulation": as_plain(self.settings.sim),
-        }
+        } | plant
 
     def metrics(self) -> dict:
         """JSON-ready summary (see the README's list of ``metrics.json`` keys)."""
@@ -265,8 +275,8 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
                                             settings.vehicle, settings.gains, settings.fastest)
     settings = dataclasses.replace(settings, trajectory=chosen)
     timings["trajectory"] = time.perf_counter() - began
-    flight = simulate(trajectory, settings.vehicle, settings.gains, world, settings.sim,
-                      flight_progress)
+    flight = simulate(trajectory, settings.flown_vehicle, settings.gains, world, settings.sim,
+                      flight_progress, model=settings.vehicle)
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from quadnav.cli.args import (
     acceleration,
@@ -70,16 +71,22 @@ def fly(args: argparse.Namespace) -> int:
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
-    written = write_run(mission, folder, figures=not args.no_figures, html=args.html)
-    _print_summary(mission)
+    return write_mission(mission, folder, figures=not args.no_figures, html=args.html)
+
+
+def write_mission(mission: Mission, folder: Path, figures: bool, html: bool) -> int:
+    """Write the run folder of ``mission``, print its summary; returns the exit code: 0 when
+    it reached the goal cleanly, else :data:`EXIT_FAILED` (saying why on stderr)."""
+    written = write_run(mission, folder, figures=figures, html=html)
+    print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not mission.success:
-        print(f"quadnav: flight failed: {_failure(mission)}", file=sys.stderr)
+        print(f"quadnav: flight failed: {failure_reason(mission)}", file=sys.stderr)
         return EXIT_FAILED
     return 0
 
 
-def _failure(mission: Mission) -> str:
+def failure_reason(mission: Mission) -> str:
     """One line saying why the mission failed."""
     if mission.flight is None:
         return f"no path: {mission.plan.message}"
@@ -98,7 +105,8 @@ def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal"
             f"{100 * goal_tolerance:.0f} cm)")
 
 
-def _print_summary(mission: Mission) -> None:
+def print_summary(mission: Mission) -> None:
+    """Print the outcome and headline figures of ``mission``, a few lines."""
     m = mission.metrics()
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
           f"{m['seed']}, vehicle {m['vehicle']}, top speed {m['speed_m_s']:.3g} m/s")

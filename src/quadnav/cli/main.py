@@ -15,12 +15,14 @@ from collections.abc import Sequence
 
 from quadnav import __version__
 from quadnav.cli.animate_command import add_animate_command
+from quadnav.cli.batch_command import add_batch_command
 from quadnav.cli.blender_command import add_blender_command
 from quadnav.cli.fly_command import add_fly_command
 from quadnav.cli.kino_command import add_kino_command
 from quadnav.cli.launch import report_stop
 from quadnav.cli.map_commands import add_map_commands
 from quadnav.cli.plan_command import add_plan_command
+from quadnav.cli.refly_command import add_refly_command
 from quadnav.cli.report_command import add_report_command
 from quadnav.cli.tello_command import add_tello_command
 from quadnav.cli.track_command import add_track_command
@@ -49,6 +51,8 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     add_fly_command(commands)
     add_track_command(commands)
+    add_batch_command(commands)
+    add_refly_command(commands)
     add_animate_command(commands)
     add_blender_command(commands)
     add_map_commands(commands)

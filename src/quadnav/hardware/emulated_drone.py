@@ -472,8 +472,8 @@ class EmulatedDrone:
         stats = np.zeros(loop.STATS_SIZE)
         code, done = loop.fly_steps(
             self._state, self._memory, 0, steps, np.ascontiguousarray(references),
-            self._vehicle, self._gains, self.settings.substeps, self._dt, self.floor,
-            np.zeros((steps, 3)), np.zeros((steps, 12)), False,
+            self._vehicle, self._vehicle, self._gains, self.settings.substeps, self._dt,
+            self.floor, np.zeros((steps, 3)), np.zeros((steps, 12)), False,
             np.array([-np.inf] * 3 + [np.inf] * 3), np.zeros((0, 6)), self._grid, 1,
             records, np.zeros((steps, 4)), stats)
         if code != loop.RUNNING:  # diverged (e.g. tipped over): it crashes to the floor

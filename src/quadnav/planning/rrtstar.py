@@ -4,7 +4,9 @@ The iterations run in numba (:mod:`quadnav.planning.rrtstar_kernel`) in chunks; 
 chunks this driver checks the wall clock, grows the arrays, records improvements and
 reports progress. Chunks start small and double while they take under
 :data:`CHUNK_SECONDS`, so the time to the first solution is measured to within a chunk
-of a few iterations and the time budget is kept to within a few milliseconds.
+of a few iterations and the time budget is kept to within a few milliseconds. The arrays
+grow only when full, so the search does not depend on where the chunks end: the same seed
+and sample budget give the same tree, to the last bit, however fast the machine.
 
 The near radius follows OMPL (see the kernel's docstring).
 """
@@ -181,11 +183,11 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
             stopped_by = None
         if stopped_by is not None:
             break
-        chunk = int(min(chunk, limit - counts[ITERATIONS]))
-        if counts[NODES] + chunk > state.capacity:
-            state = state.grown(int(counts[NODES]),
-                                max(2 * state.capacity, int(counts[NODES] + chunk)),
-                                origin, extent)
+        if counts[NODES] == state.capacity:  # full: grow at a count the seed fixes
+            state = state.grown(int(counts[NODES]), 2 * state.capacity, origin, extent)
+        # An iteration adds at most one vertex: a chunk never outgrows the arrays, so they
+        # grow (and the node grid is rebuilt) at the same iteration however long chunks take.
+        chunk = int(min(chunk, limit - counts[ITERATIONS], state.capacity - counts[NODES]))
         began = time.perf_counter()
         grow(rng, chunk, bool(best[BEST_VERTEX] < 0), start, goal, tuning, rotation, grid,
              state.nodes, state.cost, state.parent, state.first_child, state.next_sibling,

@@ -111,7 +111,7 @@ def unit_of(key: str) -> str:
     return next((unit for ending, unit in UNITS if key.endswith(ending)), "")
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]], value_column: int) -> str:
+def html_table(header: Sequence[str], rows: Sequence[Sequence[str]], value_column: int) -> str:
     """An HTML table of already escaped cells; the ``value_column`` is set monospace."""
     head = "".join(f"<th>{cell}</th>" for cell in header)
     body = "".join(
@@ -126,7 +126,11 @@ def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
     path = run.folder / name
     if path.is_file():
         return path.read_bytes()
-    fig = make(run)
+    return png_bytes(make(run))
+
+
+def png_bytes(fig: Figure) -> bytes:
+    """``fig`` as PNG bytes; the figure is closed."""
     buffer = io.BytesIO()
     try:
         fig.savefig(buffer, format="png")
@@ -135,12 +139,21 @@ def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
     return buffer.getvalue()
 
 
-def _figure(png: bytes, name: str) -> str:
+def figure_html(png: bytes, caption: str) -> str:
+    """A ``<figure>`` with the PNG embedded (base64) and its caption."""
     width, height = struct.unpack(">II", png[16:24])  # from the PNG's IHDR chunk
     data = base64.b64encode(png).decode("ascii")
     return (f'<figure><img src="data:image/png;base64,{data}" width="{width}" '
-            f'height="{height}" alt="{html.escape(CAPTIONS[name])}">'
-            f"<figcaption>{html.escape(CAPTIONS[name])}</figcaption></figure>")
+            f'height="{height}" alt="{html.escape(caption)}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def html_page(title: str, body: str) -> str:
+    """A whole HTML document: ``title`` (text) and ``body`` (HTML) in the report's style."""
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
+            f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
+            f"<body><main>{body}</main></body></html>\n")
 
 
 def _summary(run: Run) -> str:
@@ -174,12 +187,12 @@ def run_section(run: Run, number: int, folder: Path) -> str:
     m = run.metrics
     world = run.world
     size = " x ".join(f"{extent:g}" for extent in world.extent)
-    figures = "".join(_figure(_png(run, name, make), name)
+    figures = "".join(figure_html(_png(run, name, make), CAPTIONS[name])
                       for name, make in figure_makers(run).items())
-    metrics = _table(("metrics.json key", "value", "unit"),
+    metrics = html_table(("metrics.json key", "value", "unit"),
                      [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)),
                        unit_of(key)) for key, value in m.items()], 1)
-    parameters = _table(("parameter", "value"),
+    parameters = html_table(("parameter", "value"),
                         [(f"<code>{html.escape(key)}</code>", html.escape(format_value(value)))
                          for key, value in flatten(run.parameters)], 1)
     where = (f"flown in an empty box of {size} m" if run.is_track
@@ -207,7 +220,7 @@ def _overview(runs: Sequence[Run]) -> str:
              number(run.metrics.get("rms_tracking_error_m"), CM_PER_M),
              number(run.metrics.get("max_tracking_error_m"), CM_PER_M))
             for k, run in enumerate(runs, start=1)]
-    return "<h2>Overview</h2>" + _table(
+    return "<h2>Overview</h2>" + html_table(
         ("run", "map or reference", "outcome", "path (m)", "flight (s)", "RMS error (cm)",
          "max error (cm)"), rows, 1)
 
@@ -221,14 +234,11 @@ def report_html(runs: Sequence[Run], shown: Sequence[Path] | None = None) -> str
     sections = "".join(run_section(run, k, folder)
                        for k, (run, folder) in enumerate(zip(runs, folders, strict=True), 1))
     overview = _overview(runs) if len(runs) > 1 else ""
-    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
-            f"<body><main><h1>quadnav flight report</h1>"
-            f'<p class="muted">{len(runs)} run{"s" if len(runs) > 1 else ""}, written by '
-            f"quadnav {__version__} from the files of each run folder. Units are SI "
-            f"(metres, seconds) unless a column says otherwise.</p>"
-            f"{overview}{sections}</main></body></html>\n")
+    return html_page(title, f"<h1>quadnav flight report</h1>"
+                     f'<p class="muted">{len(runs)} run{"s" if len(runs) > 1 else ""}, '
+                     f"written by quadnav {__version__} from the files of each run folder. "
+                     "Units are SI (metres, seconds) unless a column says otherwise.</p>"
+                     f"{overview}{sections}")
 
 
 def write_report(runs: Sequence[Run], path: str | Path,

@@ -58,7 +58,8 @@ def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
 
 @njit(cache=True)
 def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
-              references: np.ndarray, v: VehicleArrays, g: GainArrays, substeps: int,
+              references: np.ndarray, v: VehicleArrays, model: VehicleArrays,
+              g: GainArrays, substeps: int,
               dt_control: float, floor_z: float, forces: np.ndarray, noise: np.ndarray,
               noisy: bool, boundary: np.ndarray, blocks: np.ndarray, grid,
               record_every: int, record_states: np.ndarray, record_commands: np.ndarray,
@@ -71,7 +72,10 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
         first: first control step to run (its index into the per-step tables).
         last: one past the last control step to run.
         references: (K, 11) reference per control step (the last row is held after).
-        v: the vehicle (:func:`~quadnav.vehicle.dynamics.vehicle_arrays`).
+        v: the vehicle that flies, the plant (:func:`~quadnav.vehicle.dynamics.vehicle_arrays`):
+            its dynamics are integrated and its body box checked for contact.
+        model: the vehicle as the controller knows it (``v`` itself unless the plant
+            differs from the model, e.g. a heavier vehicle than the controller assumes).
         g: the gains (:func:`~quadnav.control.cascade.gain_arrays`).
         substeps: RK4 steps per control step.
         dt_control: control period, s.
@@ -93,7 +97,7 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
     for k in range(first, last):
         reference = references[min(k, last_reference)]
         seen = _measured(state, noise[k]) if noisy else state
-        commands = control(memory, seen, reference, g, v, dt_control)
+        commands = control(memory, seen, reference, g, model, dt_control)
         error = 0.0
         velocity_error = 0.0
         for a in range(3):

@@ -85,13 +85,14 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
              gains: Gains | None = None, world: World | None = None,
              settings: SimSettings | None = None,
              progress: Callable[[float], None] | None = None,
-             initial_state: FloatArray | None = None) -> Flight:
+             initial_state: FloatArray | None = None,
+             model: VehicleParams | None = None) -> Flight:
     """Fly ``trajectory`` from a hover at its start through the cascade and the dynamics.
 
     Args:
         trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
             any other :class:`~quadnav.trajectory.reference.Reference`.
-        params: the vehicle (default: the ``tello`` preset).
+        params: the vehicle that flies, the plant (default: the ``tello`` preset).
         gains: the controller (default: :class:`~quadnav.control.gains.Gains`).
         world: the real (uninflated) map: its blocks are obstacles, its boundary the box
             the centre must stay in (within ``settings.boundary_tolerance``) and its lower
@@ -100,6 +101,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         progress: called with the fraction of the flight done, after each chunk.
         initial_state: (17,) state to start from instead of the hover at the start (see
             :mod:`quadnav.vehicle.dynamics`), e.g. to fly a step response.
+        model: the vehicle as the controller knows it (default: ``params``); a plant
+            that differs from it (heavier, weaker rotors, more drag) is flown by a
+            controller tuned for ``model`` that does not know the difference.
     """
     params = params or load_params()
     gains = gains or Gains()
@@ -110,6 +114,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     references = reference_table(trajectory, dt, steps)
     forces, noise = _disturbances(settings, steps, dt)
     vehicle = vehicle_arrays(params)
+    controller_model = vehicle if model is None else vehicle_arrays(model)
     gains_compiled = gain_arrays(gains)
     state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
@@ -136,7 +141,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     while done < steps and code == loop.RUNNING:
         last = min(done + chunk, steps)
         code, ran = loop.fly_steps(
-            state, memory, done, last, references, vehicle, gains_compiled,
+            state, memory, done, last, references, vehicle, controller_model, gains_compiled,
             settings.substeps, dt, floor_z, forces, noise, settings.noisy, boundary,
             world_blocks, grid, every, record_states, record_commands, stats)
         done += ran

@@ -1,0 +1,154 @@
+"""Benchmark: ``quadnav batch`` against a shell loop of ``quadnav fly --no-figures`` processes
+flying the same missions, in missions per CPU-second.
+
+Run: ``python bench/batch.py [--missions 20] [--repeats 3] [--workers 2] [--improve N]``,
+or ``--quick`` for a smoke run (4 missions, one repeat).
+
+The missions: the built-in worlds ``forest`` and ``window`` alternately, each with its own
+start and goal, seeds 0, 1, 2, ... (half the missions each), at 2 m/s with 3 m/s^2 and
+``fly``'s search budget (50,000 samples of improvement after the first path; ``--improve``
+sets another, for both) with a 60 s time cap, the default vehicle and gains. Each repeat
+runs, in this order:
+
+* ``quadnav batch SPEC --workers W --quiet -o DIR`` (a fresh DIR): one process that spawns
+  W workers, each loading the compiled kernels once;
+* the baseline: one ``bash`` script that runs ``quadnav fly MAP --seed S --speed 2 --accel 3
+  --time 60 --improve N --no-figures --quiet -o DIR`` for each mission in turn (each a new
+  process that loads the kernels again and writes its run folder).
+
+CPU seconds are user + system time of every process each started (children included:
+``resource.getrusage(RUSAGE_CHILDREN)`` before and after). Printed: the medians over the
+repeats of CPU seconds, missions per CPU-second and wall seconds of each, the ratio of
+missions per CPU-second (target: at least 5x), and whether every ``fly`` run gave the
+metrics of the batch's row (wall times aside). Nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import shlex
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from planning import table
+
+from quadnav.batch.table import RESULTS_CSV, WALL_TIME_COLUMNS, read_rows
+from quadnav.mission import DEFAULT_IMPROVE
+
+#: The console script beside this Python.
+QUADNAV = str(Path(sys.executable).with_name("quadnav"))
+MAPS = ("forest", "window")
+SPEED = 2.0
+ACCELERATION = 3.0
+TIME_CAP = 60.0
+TARGET = 5.0
+
+
+@dataclass(frozen=True)
+class Measure:
+    """One timed run: CPU seconds (children included) and wall seconds."""
+
+    cpu: float
+    wall: float
+
+
+def timed(command: list[str]) -> Measure:
+    """Run ``command``, checking it succeeds; its CPU and wall seconds."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    began = time.perf_counter()
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    wall = time.perf_counter() - began
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return Measure(cpu, wall)
+
+
+def missions(count: int) -> list[tuple[str, int]]:
+    """(map, seed) of each mission, in the batch's order (map, then seed)."""
+    seeds = count // len(MAPS)
+    return [(name, seed) for name in MAPS for seed in range(seeds)]
+
+
+def write_spec(folder: Path, count: int, improve: int) -> Path:
+    """The batch spec of :func:`missions`."""
+    path = folder / "spec.toml"
+    path.write_text(f"seeds = {count // len(MAPS)}\nspeeds = [{SPEED}]\naccel = {ACCELERATION}"
+                    f"\ntime_cap = {TIME_CAP}\nimprove = {improve}\n"
+                    f"maps = {json.dumps(list(MAPS))}\n")
+    return path
+
+
+def fly_script(jobs: list[tuple[str, int]], folder: Path, improve: int) -> str:
+    """The shell loop: one ``quadnav fly`` per mission, into ``folder``/k."""
+    lines = [shlex.join([QUADNAV, "fly", name, "--seed", str(seed), "--speed", str(SPEED),
+                         "--accel", str(ACCELERATION), "--time", str(TIME_CAP),
+                         "--improve", str(improve),
+                         "--no-figures", "--quiet", "-o", str(folder / str(k))]) + " >/dev/null"
+             for k, (name, seed) in enumerate(jobs)]
+    return "set -e\n" + "\n".join(lines) + "\n"
+
+
+def same_results(batch_folder: Path, fly_folder: Path, count: int) -> bool:
+    """Whether each ``fly`` run's metrics equal its batch row (wall times aside)."""
+    rows = read_rows(batch_folder / RESULTS_CSV)
+    for k, row in enumerate(rows[:count]):
+        metrics = json.loads((fly_folder / str(k) / "metrics.json").read_text())
+        for key, value in metrics.items():
+            if key not in ("map", "start", "goal", *WALL_TIME_COLUMNS) and row[key] != value:
+                return False
+    return True
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--missions", type=int, default=None, help="missions (20; quick 4)")
+    parser.add_argument("--repeats", type=int, default=None, help="repeats (3; quick 1)")
+    parser.add_argument("--workers", type=int, default=2, help="batch workers (2)")
+    parser.add_argument("--improve", type=int, default=DEFAULT_IMPROVE,
+                        help=f"search samples after the first path ({DEFAULT_IMPROVE:,})")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 4 missions, once")
+    args = parser.parse_args()
+    count = args.missions or (4 if args.quick else 20)
+    count -= count % len(MAPS)
+    repeats = args.repeats or (1 if args.quick else 3)
+    jobs = missions(count)
+    batch_runs, fly_runs, agree = [], [], []
+    with tempfile.TemporaryDirectory() as scratch:
+        root = Path(scratch)
+        spec = write_spec(root, count, args.improve)
+        for k in range(repeats):
+            print(f"  repeat {k + 1}/{repeats}: quadnav batch, then the fly loop",
+                  file=sys.stderr, flush=True)
+            out = root / f"batch-{k}"
+            batch_runs.append(timed([QUADNAV, "batch", str(spec), "--workers",
+                                     str(args.workers), "--quiet", "-o", str(out)]))
+            script = root / f"fly-{k}.sh"
+            script.write_text(fly_script(jobs, root / f"fly-{k}", args.improve))
+            fly_runs.append(timed(["bash", str(script)]))
+            agree.append(same_results(out, root / f"fly-{k}", count))
+
+    def row(name: str, runs: list[Measure]) -> list[str]:
+        cpu = statistics.median(m.cpu for m in runs)
+        wall = statistics.median(m.wall for m in runs)
+        return [name, f"{cpu:.1f}", f"{count / cpu:.3f}", f"{wall:.1f}"]
+
+    print(f"{count} missions ({', '.join(MAPS)}, seeds 0-{count // len(MAPS) - 1}, "
+          f"{SPEED:g} m/s, {ACCELERATION:g} m/s^2, {args.improve:,} samples of improvement); "
+          f"medians of {repeats} repeats\n")
+    print(table(["run", "CPU s", "missions per CPU-s", "wall s"],
+                [row(f"quadnav batch --workers {args.workers}", batch_runs),
+                 row("shell loop of quadnav fly --no-figures", fly_runs)]))
+    ratio = statistics.median(f.cpu / b.cpu for b, f in zip(batch_runs, fly_runs, strict=True))
+    print(f"\nmissions per CPU-second, batch / fly loop: {ratio:.1f}x (target >= {TARGET:g}x)")
+    print(f"every fly run gave its batch row's metrics: {'yes' if all(agree) else 'NO'}")
+
+
+if __name__ == "__main__":
+    main()

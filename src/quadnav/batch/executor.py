@@ -1,0 +1,233 @@
+"""Run one module-level function over many items on local worker processes or on Ray.
+
+Generic: nothing here knows about missions. A job is ``function(shared, item)``, where
+``function`` is a module-level function (picklable by reference), ``shared`` is data every
+job needs (maps, settings; sent once to each worker process, not once per job) and ``item``
+is the job's own small value. Results come back as ``(index of the item, result)`` as they
+finish, in any order::
+
+    with open_executor(shared, warm_up=load_kernels, workers=4) as executor:
+        for index, result in executor.map_unordered(evaluate, items):
+            ...
+
+Local (:class:`LocalExecutor`): a :class:`~concurrent.futures.ProcessPoolExecutor` whose
+workers are spawned (not forked: numba's compiled state and ``fork`` do not mix), each
+made once with ``shared`` and ``warm_up(shared)`` run in its initializer (import, load the
+compiled kernels). Workers ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
+:meth:`~LocalExecutor.close` with ``cancel`` ends the workers at once.
+
+Ray (:class:`RayExecutor`, the optional ``quadnav[ray]``; imported only here, only when
+asked for): ``ray.init(address=...)``, or a local Ray started for the run without an
+address; ``shared`` goes to the object store once (``ray.put``) and each worker process
+reads it once; one remote task per item, results taken with ``ray.wait`` as they finish.
+A job's result depends only on its ``shared`` and ``item``, so both give the same results.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+import signal
+import socket
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from types import TracebackType
+from typing import Any, Protocol
+
+from quadnav.errors import QuadnavError
+from quadnav.signals import STOP_SIGNALS
+
+#: ``function(shared, item) -> result``, defined at a module's top level.
+Job = Callable[[Any, Any], Any]
+#: ``warm_up(shared)``: run once in each worker before its first job.
+WarmUp = Callable[[Any], None]
+
+
+def cpu_count() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+class Executor(Protocol):
+    """What :func:`open_executor` returns."""
+
+    workers: int
+
+    def map_unordered(self, function: Job, items: Sequence[Any]
+                      ) -> Iterator[tuple[int, Any]]:
+        """``(index, function(shared, items[index]))`` for every item, as each finishes."""
+
+    def close(self, cancel: bool = False) -> None:
+        """Release the workers; with ``cancel``, at once, dropping unfinished jobs."""
+
+    def __enter__(self) -> Executor: ...
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 traceback: TracebackType | None) -> None: ...
+
+
+class _Closing:
+    """Context manager protocol: leaving the block closes the executor, cancelling the
+    unfinished jobs when it ends with an exception (an error, Ctrl-C)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
+                 traceback: TracebackType | None) -> None:
+        self.close(cancel=kind is not None)
+
+
+# ------------------------------------------------------------------------------- local
+_shared: Any = None
+
+
+def _start_worker(shared: Any, warm_up: WarmUp | None) -> None:
+    """Initializer of a local worker: ignore stop signals, keep ``shared``, warm up."""
+    global _shared
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, signal.SIG_IGN)
+    _shared = shared
+    if warm_up is not None:
+        warm_up(shared)
+
+
+def _call(function: Job, item: Any) -> Any:
+    return function(_shared, item)
+
+
+class LocalExecutor(_Closing):
+    """Jobs on ``workers`` local processes (see the module docstring)."""
+
+    def __init__(self, shared: Any, warm_up: WarmUp | None = None,
+                 workers: int | None = None) -> None:
+        self.workers = workers or cpu_count()
+        self._pool = ProcessPoolExecutor(
+            self.workers, mp_context=multiprocessing.get_context("spawn"),
+            initializer=_start_worker, initargs=(shared, warm_up))
+
+    def map_unordered(self, function: Job, items: Sequence[Any]
+                      ) -> Iterator[tuple[int, Any]]:
+        pending: dict[Future, int] = {self._pool.submit(_call, function, item): index
+                                      for index, item in enumerate(items)}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                yield pending.pop(future), future.result()
+
+    def close(self, cancel: bool = False) -> None:
+        if cancel:
+            # The workers ignore stop signals: end them at once. (Python 3.14 has
+            # ProcessPoolExecutor.kill_workers for this.)
+            processes = list(getattr(self._pool, "_processes", {}).values())
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.kill()
+            for process in processes:
+                process.join()
+        else:
+            self._pool.shutdown(wait=True)
+
+
+# --------------------------------------------------------------------------------- Ray
+_ray_shared: dict[str, Any] = {}
+
+
+def _ray_job(function: Job, shared_ref: list, warm_up: WarmUp | None, item: Any) -> Any:
+    """A Ray task: ``function(shared, item)``, with ``shared`` read from the object store
+    (and ``warm_up`` run) once per worker process."""
+    import ray
+
+    ref = shared_ref[0]  # in a list, so that Ray passes the reference, not the value
+    if ref.hex() not in _ray_shared:
+        _ray_shared.clear()
+        shared = ray.get(ref)
+        if warm_up is not None:
+            warm_up(shared)
+        _ray_shared[ref.hex()] = shared
+    return function(_ray_shared[ref.hex()], item)
+
+
+def _import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise QuadnavError("--ray needs the optional Ray package: "
+                           "python -m pip install 'quadnav[ray]'") from None
+    return ray
+
+
+#: Seconds to wait for a Ray cluster's head to answer (``ray.init`` itself waits forever).
+CONNECT_TIMEOUT = 10.0
+
+
+def check_reachable(address: str) -> None:
+    """QuadnavError unless something answers at the ``HOST:PORT`` of ``address`` (a
+    ``ray://`` prefix allowed; ``auto`` and addresses without a port are left to Ray)."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+    except OSError as error:
+        reason = error.strerror or str(error) or type(error).__name__
+        raise QuadnavError(f"--ray {address}: cannot reach the Ray cluster's head: {reason}; "
+                           "start it with ray start --head") from None
+
+
+class RayExecutor(_Closing):
+    """Jobs as Ray tasks on the cluster at ``address``, or on a local Ray of ``workers``
+    CPUs started for the run when ``address`` is None (see the module docstring)."""
+
+    def __init__(self, shared: Any, warm_up: WarmUp | None = None,
+                 address: str | None = None, workers: int | None = None) -> None:
+        ray = self._ray = _import_ray()
+        options: dict[str, Any] = {"logging_level": logging.WARNING, "log_to_driver": False,
+                                   "configure_logging": True}
+        if address is None:
+            options |= {"num_cpus": workers or cpu_count(), "include_dashboard": False}
+        else:
+            check_reachable(address)
+        try:
+            ray.init(address=address, **options)
+        except (ConnectionError, RuntimeError, ValueError) as error:
+            first_line = str(error).strip().splitlines()[0] if str(error).strip() else ""
+            raise QuadnavError(f"cannot connect to the Ray cluster at {address}: "
+                               f"{first_line}") from None
+        self.workers = int(ray.cluster_resources().get("CPU", 1))
+        self._shared = [ray.put(shared)]
+        self._warm_up = warm_up
+        self._task = ray.remote(num_cpus=1)(_ray_job)
+        self._pending: dict[Any, int] = {}
+
+    def map_unordered(self, function: Job, items: Sequence[Any]
+                      ) -> Iterator[tuple[int, Any]]:
+        ray = self._ray
+        self._pending = {self._task.remote(function, self._shared, self._warm_up, item): index
+                         for index, item in enumerate(items)}
+        while self._pending:
+            done, _ = ray.wait(list(self._pending), num_returns=1)
+            for ref in done:
+                index = self._pending.pop(ref)
+                yield index, ray.get(ref)
+
+    def close(self, cancel: bool = False) -> None:
+        if cancel:
+            for ref in self._pending:
+                self._ray.cancel(ref, force=True)
+        self._pending = {}
+        self._ray.shutdown()
+
+
+def open_executor(shared: Any, warm_up: WarmUp | None = None, workers: int | None = None,
+                  ray: bool = False, address: str | None = None) -> Executor:
+    """Local worker processes (``workers``, default: one per CPU), or with ``ray`` a Ray
+    cluster at ``address`` (None: a local Ray of ``workers`` CPUs). QuadnavError when Ray is
+    asked for but not installed or the cluster cannot be reached."""
+    if ray:
+        return RayExecutor(shared, warm_up, address, workers)
+    return LocalExecutor(shared, warm_up, workers)

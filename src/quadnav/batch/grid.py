@@ -1,0 +1,428 @@
+"""What a batch flies: a :class:`BatchSpec` (read from a TOML spec or built from the command
+line) and the :class:`MissionSpec` of each of its missions, enumerated in a fixed order.
+
+A spec is a table (see the README's ``quadnav batch`` section)::
+
+    seeds = 50                       # or a list [0, 1, 5]
+    speeds = [1.0, 2.0]              # m/s, or "max"
+    maps = ["forest", "map.json", {map = "map1.txt", start = [0.1, -4.9, 0.2], goal = [8, 18, 3]}]
+    winds = [[0, 0, 0]]              # steady forces, N        (grid; these are the defaults)
+    gusts = [0.0]                    # gust std, N
+    spreads = [0.0]                  # vehicle spread fractions
+    planners = ["rrtstar"]
+    gains = ["default"]              # or gain files
+    accel = 3.0                      # fixed settings, see FIXED_KEYS
+
+Every value is checked against its stated range; every mistake is one
+:class:`~quadnav.errors.QuadnavError` naming the spec and, where it can be found, the line.
+Relative paths are resolved against the spec's folder. :meth:`BatchSpec.table` is the spec
+with every path resolved and every default filled in: the batch folder keeps it
+(``batch.json``), and :func:`parse_spec` reads it back to the same spec.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import re
+from dataclasses import dataclass
+from itertools import product
+from pathlib import Path
+from typing import Any
+
+from quadnav.config import read_toml
+from quadnav.errors import QuadnavError
+from quadnav.limits import (
+    ACCELERATION,
+    COORDINATE,
+    FORCE,
+    GUSTS,
+    MARGIN,
+    PLAN_ITERATIONS,
+    PLAN_TIME,
+    RATE,
+    SEED,
+    SETTLE,
+    SPEED,
+    Range,
+    format_number,
+)
+from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
+from quadnav.planning import get_planner
+from quadnav.sim.settings import SimSettings
+from quadnav.trajectory.generate import METHODS, TIMINGS
+from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+from quadnav.world import read_start_goal
+from quadnav.world.builtin import is_builtin_spec
+
+#: Wall-time cap of one mission's search, s: high enough that the sample budget
+#: (``improve``) ends every search in practice, so a mission's row depends on its seed alone.
+DEFAULT_TIME_CAP = 60.0
+#: The most missions one batch may hold.
+MAX_MISSIONS = 1_000_000
+#: A vehicle spread: the largest fraction by which mass, thrust or drag may differ.
+SPREAD = Range(0.0, 0.9)
+#: Seeds a batch may draw (``seeds = N`` for seeds 0 to N - 1).
+SEED_COUNT = Range(1, MAX_MISSIONS, whole=True)
+#: The gains of the vehicle, as a ``gains`` entry.
+DEFAULT_GAINS = "default"
+#: The vehicle parameters a spread scales, in the order the factors are drawn.
+SPREAD_PARTS = ("mass", "thrust", "drag")
+
+#: Keys of the grid, each a list of values.
+GRID_KEYS = ("maps", "seeds", "speeds", "winds", "gusts", "spreads", "planners", "gains")
+#: Keys of a map entry given as a table.
+MAP_KEYS = ("map", "start", "goal", "start_goal", "margin")
+
+
+@dataclass(frozen=True)
+class FixedSettings:
+    """Settings that every mission of a batch shares.
+
+    Attributes:
+        accel: largest acceleration of the trajectories, m/s^2.
+        margin: safety margin of maps without their own, m (None: the map's, else 0.2).
+        vehicle: a vehicle preset name or a TOML file (resolved path).
+        settle: time flown after each trajectory ends, s.
+        method: trajectory shape (:data:`~quadnav.trajectory.generate.METHODS`).
+        timing: segment timing (:data:`~quadnav.trajectory.generate.TIMINGS`).
+        improve: samples of improvement after a search's first path.
+        time_cap: wall-time cap of a search, s.
+        physics_rate: RK4 steps per second, Hz.
+        control_rate: controller updates per second, Hz.
+    """
+
+    accel: float = DEFAULT_ACCELERATION
+    margin: float | None = None
+    vehicle: str = DEFAULT_PRESET
+    settle: float = SimSettings.settle_time
+    method: str = "minsnap"
+    timing: str = "fastest"
+    improve: int = DEFAULT_IMPROVE
+    time_cap: float = DEFAULT_TIME_CAP
+    physics_rate: float = SimSettings.physics_rate
+    control_rate: float = SimSettings.control_rate
+
+
+#: Keys of the fixed settings.
+FIXED_KEYS = tuple(FixedSettings.__dataclass_fields__)
+ALL_KEYS = GRID_KEYS + FIXED_KEYS
+
+
+@dataclass(frozen=True)
+class MapEntry:
+    """One map of the grid with its query.
+
+    Attributes:
+        map: a map file (resolved path) or a built-in world spec.
+        start: (x, y, z) m, or None: the map's own, else drawn from each mission's seed.
+        goal: likewise.
+        margin: m, or None: the batch's ``margin``, else the map's own, else 0.2.
+    """
+
+    map: str
+    start: tuple[float, float, float] | None = None
+    goal: tuple[float, float, float] | None = None
+    margin: float | None = None
+
+
+@dataclass(frozen=True)
+class Spread:
+    """How far the flown vehicle may differ from the nominal one: mass, thrust coefficient
+    and drag are each scaled by a factor drawn uniformly in [1 - f, 1 + f] per mission."""
+
+    mass: float = 0.0
+    thrust: float = 0.0
+    drag: float = 0.0
+
+    @property
+    def label(self) -> str:
+        """``0.1`` when the three fractions agree, else ``mass=0.1,thrust=0.05,drag=0.2``."""
+        if self.mass == self.thrust == self.drag:
+            return f"{self.mass:g}"
+        return ",".join(f"{part}={getattr(self, part):g}" for part in SPREAD_PARTS)
+
+
+@dataclass(frozen=True)
+class MissionSpec:
+    """One mission of a batch: everything its row depends on besides the fixed settings.
+
+    Attributes:
+        map: the map and its query.
+        seed: seed of the planner, the gusts, the spread factors and a drawn start/goal.
+        speed: top speed, m/s (None: as fast as the vehicle can follow, ``max``).
+        wind: (3,) steady force, N, world frame.
+        gusts: gust standard deviation per axis, N.
+        spread: the vehicle spread.
+        planner: planner name.
+        gains: ``default`` or a gains file (resolved path).
+    """
+
+    map: MapEntry
+    seed: int
+    speed: float | None
+    wind: tuple[float, float, float]
+    gusts: float
+    spread: Spread
+    planner: str
+    gains: str
+
+    @property
+    def key(self) -> str:
+        """A short stable name of the mission: a hash of its grid values."""
+        values = json.dumps([self.map.__dict__, self.seed, self.speed, self.wind, self.gusts,
+                             self.spread.__dict__, self.planner, self.gains],
+                            sort_keys=True)
+        return hashlib.sha256(values.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class BatchSpec:
+    """The grid and the fixed settings of a batch (see the module docstring)."""
+
+    maps: tuple[MapEntry, ...]
+    seeds: tuple[int, ...]
+    speeds: tuple[float | None, ...]
+    winds: tuple[tuple[float, float, float], ...]
+    gusts: tuple[float, ...]
+    spreads: tuple[Spread, ...]
+    planners: tuple[str, ...]
+    gains: tuple[str, ...]
+    fixed: FixedSettings
+
+    def missions(self) -> list[MissionSpec]:
+        """Every mission, in a fixed order: map, speed, wind, gusts, spread, planner,
+        gains, then seed (innermost)."""
+        return [MissionSpec(m, seed, speed, wind, gust, spread, planner, gains)
+                for m, speed, wind, gust, spread, planner, gains, seed in product(
+                    self.maps, self.speeds, self.winds, self.gusts, self.spreads,
+                    self.planners, self.gains, self.seeds)]
+
+    @property
+    def size(self) -> int:
+        """Number of missions."""
+        return math.prod(len(values) for values in (
+            self.maps, self.seeds, self.speeds, self.winds, self.gusts, self.spreads,
+            self.planners, self.gains))
+
+    def table(self) -> dict[str, Any]:
+        """The spec as a TOML-like table with every path resolved and every default filled
+        in; :func:`parse_spec` reads it back to this spec."""
+        maps = [{key: list(value) if isinstance(value, tuple) else value
+                 for key, value in entry.__dict__.items() if value is not None}
+                for entry in self.maps]
+        return {
+            "maps": maps, "seeds": list(self.seeds),
+            "speeds": ["max" if v is None else v for v in self.speeds],
+            "winds": [list(w) for w in self.winds], "gusts": list(self.gusts),
+            "spreads": [s.__dict__ for s in self.spreads], "planners": list(self.planners),
+            "gains": list(self.gains),
+        } | {key: value for key, value in self.fixed.__dict__.items() if value is not None}
+
+
+class _Source:
+    """Where a spec comes from, for messages: the file and its text (to find lines)."""
+
+    def __init__(self, name: str, text: str = "") -> None:
+        self.name = name
+        self.text = text
+
+    def error(self, key: str, message: str) -> QuadnavError:
+        """A one-line error about ``key``, naming the line that sets it if one does."""
+        match = re.search(rf"^\s*\[?\s*{re.escape(key)}\s*[=\]]", self.text, re.MULTILINE)
+        if match is None:
+            match = re.search(rf"[{{,]\s*{re.escape(key)}\s*=", self.text)
+        where = self.name
+        if match is not None:
+            where += f":{self.text.count(chr(10), 0, match.start() + 1) + 1}"
+        return QuadnavError(f"{where}: {key}: {message}")
+
+
+def read_spec(path: str | Path) -> BatchSpec:
+    """The spec in the TOML file at ``path``; relative paths in it are resolved against its
+    folder. QuadnavError (one line naming the file and line) for any mistake."""
+    path = Path(path)
+    table = read_toml(path)
+    return parse_spec(table, path.parent, _Source(str(path), path.read_text(encoding="utf-8")))
+
+
+def parse_spec(table: dict[str, Any], folder: str | Path,
+               source: _Source | str = "the batch spec") -> BatchSpec:
+    """A spec from a TOML-like ``table``; relative paths are resolved against ``folder``."""
+    src = source if isinstance(source, _Source) else _Source(source)
+    folder = Path(folder)
+    for key in table:
+        if key not in ALL_KEYS:
+            raise src.error(key, f"unknown key; expected one of {', '.join(ALL_KEYS)}")
+    for key in ("maps", "seeds", "speeds"):
+        if key not in table:
+            raise QuadnavError(f"{src.name}: missing key {key!r}: a batch needs maps, seeds "
+                               "and speeds")
+    fixed = _fixed(table, folder, src)
+    spec = BatchSpec(
+        maps=tuple(_map_entry(item, folder, src) for item in _list(table, "maps", src)),
+        seeds=_seeds(table["seeds"], src),
+        speeds=tuple(_speed(value, src) for value in _list(table, "speeds", src)),
+        winds=tuple(_wind(value, src) for value in _list(table, "winds", src, [[0, 0, 0]])),
+        gusts=tuple(_number(value, GUSTS, "gusts", src)
+                    for value in _list(table, "gusts", src, [0.0])),
+        spreads=tuple(_spread(value, src) for value in _list(table, "spreads", src, [0.0])),
+        planners=tuple(_planner(value, src)
+                       for value in _list(table, "planners", src, ["rrtstar"])),
+        gains=tuple(_gains(value, folder, src)
+                    for value in _list(table, "gains", src, [DEFAULT_GAINS])),
+        fixed=fixed)
+    if spec.size > MAX_MISSIONS:
+        raise QuadnavError(f"{src.name}: the grid holds {format_number(spec.size)} missions; "
+                           f"expected at most {format_number(MAX_MISSIONS)}")
+    return spec
+
+
+def _list(table: dict, key: str, src: _Source, default: list | None = None) -> list:
+    """The non-empty list at ``key`` (a single value counts as a list of one)."""
+    value = table.get(key, default)
+    values = value if isinstance(value, list) else [value]
+    if not values:
+        raise src.error(key, "expected at least one value, got an empty list")
+    if len(values) != len({json.dumps(v, sort_keys=True) for v in values}):
+        raise src.error(key, "a value is listed twice")
+    return values
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _number(value: Any, allowed: Range, key: str, src: _Source) -> float:
+    if not _is_number(value) or value not in allowed:
+        raise src.error(key, f"expected {allowed.describe()}, got {value!r}")
+    return int(value) if allowed.whole else float(value)
+
+
+def _point(value: Any, key: str, src: _Source) -> tuple[float, float, float]:
+    if not (isinstance(value, list) and len(value) == 3
+            and all(_is_number(v) and v in COORDINATE for v in value)):
+        raise src.error(key, f"expected [x, y, z], each {COORDINATE.describe()}, got {value!r}")
+    x, y, z = (float(v) for v in value)
+    return x, y, z
+
+
+def _seeds(value: Any, src: _Source) -> tuple[int, ...]:
+    if isinstance(value, list):
+        seeds = tuple(_number(v, SEED, "seeds", src) for v in _list({"seeds": value},
+                                                                     "seeds", src))
+        return tuple(int(seed) for seed in seeds)
+    count = _number(value, SEED_COUNT, "seeds", src)
+    return tuple(range(int(count)))
+
+
+def _speed(value: Any, src: _Source) -> float | None:
+    if isinstance(value, str) and value.strip().lower() == "max":
+        return None
+    if not _is_number(value) or value not in SPEED:
+        raise src.error("speeds", f"expected {SPEED.describe()} or \"max\", got {value!r}")
+    return float(value)
+
+
+def _wind(value: Any, src: _Source) -> tuple[float, float, float]:
+    if not (isinstance(value, list) and len(value) == 3
+            and all(_is_number(v) and v in FORCE for v in value)):
+        raise src.error("winds", f"expected [fx, fy, fz] forces, each {FORCE.describe()}, "
+                                 f"got {value!r}")
+    x, y, z = (float(v) for v in value)
+    return x, y, z
+
+
+def _spread(value: Any, src: _Source) -> Spread:
+    if isinstance(value, dict):
+        for part in value:
+            if part not in SPREAD_PARTS:
+                raise src.error(part, f"unknown key in a spread; expected one of "
+                                      f"{', '.join(SPREAD_PARTS)}")
+        return Spread(**{part: _number(f, SPREAD, "spreads", src) for part, f in value.items()})
+    fraction = _number(value, SPREAD, "spreads", src)
+    return Spread(fraction, fraction, fraction)
+
+
+def _planner(value: Any, src: _Source) -> str:
+    if not isinstance(value, str):
+        raise src.error("planners", f"expected a planner name, got {value!r}")
+    try:
+        get_planner(value)
+    except QuadnavError as error:
+        raise src.error("planners", str(error)) from None
+    return value
+
+
+def _file(value: Any, folder: Path, key: str, what: str, src: _Source) -> str:
+    """``value`` as a path resolved against ``folder``; it must be a file."""
+    if not isinstance(value, str):
+        raise src.error(key, f"expected {what}, got {value!r}")
+    path = Path(value).expanduser()
+    path = path if path.is_absolute() else folder / path
+    if not path.is_file():
+        raise src.error(key, f"expected {what}, got {value!r} (no such file: {path})")
+    return os.path.abspath(path)
+
+
+def _gains(value: Any, folder: Path, src: _Source) -> str:
+    if value == DEFAULT_GAINS:
+        return value
+    return _file(value, folder, "gains", f"{DEFAULT_GAINS!r} or a gains TOML file", src)
+
+
+def _map_name(value: Any, folder: Path, key: str, src: _Source) -> str:
+    """A map file (resolved) or a built-in world spec."""
+    if isinstance(value, str) and is_builtin_spec(value) and not (folder / value).is_file():
+        return value
+    return _file(value, folder, key, "a map file or a built-in world spec", src)
+
+
+def _map_entry(item: Any, folder: Path, src: _Source) -> MapEntry:
+    if not isinstance(item, dict):
+        return MapEntry(_map_name(item, folder, "maps", src))
+    for key in item:
+        if key not in MAP_KEYS:
+            raise src.error(key, f"unknown key in a map entry; expected one of "
+                                 f"{', '.join(MAP_KEYS)}")
+    if "map" not in item:
+        raise src.error("maps", f"a map entry needs a map: {item!r}")
+    start = goal = None
+    if "start_goal" in item:
+        start, goal = (tuple(float(v) for v in point) for point in read_start_goal(
+            _file(item["start_goal"], folder, "start_goal", "a start/goal file", src)))
+    if "start" in item:
+        start = _point(item["start"], "start", src)
+    if "goal" in item:
+        goal = _point(item["goal"], "goal", src)
+    margin = item.get("margin")
+    return MapEntry(_map_name(item["map"], folder, "map", src), start, goal,
+                    None if margin is None else _number(margin, MARGIN, "margin", src))
+
+
+def _choice(value: Any, choices: tuple[str, ...], key: str, src: _Source) -> str:
+    if value not in choices:
+        raise src.error(key, f"expected one of {', '.join(choices)}, got {value!r}")
+    return value
+
+
+def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
+    """The fixed settings of ``table``, defaults for those it leaves out."""
+    base = FixedSettings()
+    checks = {"accel": ACCELERATION, "margin": MARGIN, "settle": SETTLE,
+              "improve": Range(0, PLAN_ITERATIONS.high, whole=True), "time_cap": PLAN_TIME,
+              "physics_rate": RATE, "control_rate": RATE}
+    values = {key: _number(table[key], allowed, key, src)
+              for key, allowed in checks.items() if key in table}
+    if "method" in table:
+        values["method"] = _choice(table["method"], METHODS, "method", src)
+    if "timing" in table:
+        values["timing"] = _choice(table["timing"], TIMINGS, "timing", src)
+    vehicle = table.get("vehicle", base.vehicle)
+    if vehicle not in preset_names():
+        vehicle = _file(vehicle, folder, "vehicle",
+                        f"a vehicle preset ({', '.join(preset_names())}) or a TOML file", src)
+    values["vehicle"] = vehicle
+    return FixedSettings(**{**base.__dict__, **values})

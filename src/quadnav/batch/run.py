@@ -1,0 +1,101 @@
+"""Run a batch into its folder: :class:`BatchRun`.
+
+The spec's files are loaded and the folder checked first (nothing is written for bad
+input); then the missions not yet in the journal fly on the executor's workers, each
+finished row journaled at once; the tables and summaries are written at the end, and also
+when the run is stopped (Ctrl-C, SIGTERM), from every row finished by then.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from quadnav.batch.executor import open_executor
+from quadnav.batch.fly_one import fly_row, load_context, warm_up
+from quadnav.batch.folder import (
+    batch_record,
+    begin,
+    finished_rows,
+    ordered_rows,
+    write_outputs,
+)
+from quadnav.batch.grid import BatchSpec
+from quadnav.batch.table import RESULTS_CSV, Journal
+
+
+class BatchRun:
+    """A batch about to run into ``folder``: its context loaded, its folder checked.
+
+    Attributes:
+        spec: the batch.
+        folder: where it writes.
+        missions: every mission of the batch, in the grid's order.
+        rows: the finished rows by mission key (those of an earlier run first).
+        todo: the missions still to fly.
+    """
+
+    def __init__(self, spec: BatchSpec, folder: str | Path, restart: bool = False) -> None:
+        """Load the spec's files and check the folder (QuadnavError for bad input, with
+        nothing written)."""
+        self.spec = spec
+        self.folder = Path(folder)
+        self.restart = restart
+        self.context = load_context(spec)
+        self.record = batch_record(spec, self.context)
+        self.missions = spec.missions()
+        self.rows: dict[str, dict[str, Any]] = {
+            row["mission_key"]: row for row in finished_rows(self.folder, self.record, restart)}
+        self.todo = [m for m in self.missions if m.key not in self.rows]
+
+    def run(self, workers: int | None = None, ray: bool = False, address: str | None = None,
+            on_start: Callable[[int], None] | None = None,
+            on_row: Callable[[dict[str, Any]], None] | None = None) -> list[str]:
+        """Fly the missions still to fly and write the outputs; returns the names written.
+
+        Args:
+            workers: local worker processes (default: one per CPU), or the CPUs of a local
+                Ray.
+            ray: run on Ray, at ``address`` (None: a local Ray started for the run).
+            address: a Ray cluster's address.
+            on_start: called with the number of workers once they are ready.
+            on_row: called with each row as it is journaled.
+
+        A stop (KeyboardInterrupt) or error still writes the outputs from the rows finished,
+        then goes on.
+        """
+        executor = None
+        if self.todo:
+            executor = open_executor(self.context, warm_up,
+                                     min(workers, len(self.todo)) if workers else None,
+                                     ray, address)
+        try:
+            begin(self.folder, self.record, self.restart)
+            journal = Journal(self.folder / RESULTS_CSV)
+            try:
+                if executor is not None:
+                    if on_start is not None:
+                        on_start(executor.workers)
+                    for _, row in executor.map_unordered(fly_row, self.todo):
+                        journal.append(row)
+                        self.rows[row["mission_key"]] = row
+                        if on_row is not None:
+                            on_row(row)
+            except BaseException:
+                if executor is not None:  # stop the workers before writing the outputs
+                    executor.close(cancel=True)
+                    executor = None
+                raise
+            finally:
+                journal.close()
+                written = write_outputs(self.folder, self.finished, len(self.missions))
+        finally:
+            if executor is not None:
+                executor.close()
+        return written
+
+    @property
+    def finished(self) -> list[dict[str, Any]]:
+        """The finished rows in the grid's order."""
+        return ordered_rows(self.missions, self.rows)

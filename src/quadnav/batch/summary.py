@@ -1,0 +1,99 @@
+"""The summary of a batch: success rates per group of grid values with Wilson intervals,
+and ``summary.json``.
+
+A group is every distinct combination of the grid values but the seed: map, speed, wind,
+gusts, spread, planner and gains, and the start, goal and margin when they were given
+(not drawn from each seed). Success is the mission's own: the goal reached within the
+tolerance with no contact; a refused mission counts as a failure.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import statistics
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from quadnav.batch.table import AXES
+from quadnav.files import atomic_output
+
+#: z of a two-sided 95 % normal interval.
+Z95 = 1.959963984540054
+#: Columns whose value names a group (the start and goal only when given).
+GROUP_COLUMNS = ("map", "speed", "wind_x", "wind_y", "wind_z", "gusts", "spread", "planner",
+                 "gains", "margin_m")
+QUERY_COLUMNS = tuple(f"{end}_{a}" for end in ("start", "goal") for a in AXES)
+#: Columns whose medians each group reports.
+MEDIAN_COLUMNS = ("rms_tracking_error_m", "min_clearance_m", "trajectory_duration_s")
+SUMMARY_JSON = "summary.json"
+
+
+def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """The Wilson score interval of a success rate, ``successes`` of ``n`` (n > 0)."""
+    p = successes / n
+    denominator = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denominator
+    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / denominator
+    # the bounds are exactly 0 with no success and 1 with no failure
+    low = 0.0 if successes == 0 else max(0.0, centre - half)
+    high = 1.0 if successes == n else min(1.0, centre + half)
+    return low, high
+
+
+def group_values(row: dict[str, Any]) -> dict[str, Any]:
+    """The values naming the group of ``row``: :data:`GROUP_COLUMNS`, and the start and
+    goal unless they were drawn."""
+    values = {name: row[name] for name in GROUP_COLUMNS}
+    if not row["start_goal_drawn"]:
+        values |= {name: row[name] for name in QUERY_COLUMNS}
+    return values
+
+
+def rate(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """``n``, ``successes``, ``success_rate`` and its Wilson 95 % ``ci_low``, ``ci_high``,
+    and ``errors`` (refused missions) of ``rows``."""
+    n = len(rows)
+    successes = sum(bool(row["success"]) for row in rows)
+    low, high = wilson_interval(successes, n) if n else (None, None)
+    return {"n": n, "successes": successes, "success_rate": successes / n if n else None,
+            "ci_low": low, "ci_high": high,
+            "errors": sum(row["error"] is not None for row in rows)}
+
+
+def _median(rows: Sequence[dict[str, Any]], name: str) -> float | None:
+    values = [row[name] for row in rows if row[name] is not None and math.isfinite(row[name])]
+    return statistics.median(values) if values else None
+
+
+def groups(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One entry per group, in the order of the rows: its values (:data:`GROUP_COLUMNS`,
+    and the ``start`` and ``goal``, each [x, y, z] m or ``drawn``), :func:`rate` and the
+    medians of
+    :data:`MEDIAN_COLUMNS` (``median_`` before each name)."""
+    members: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        members.setdefault(json.dumps(group_values(row)), []).append(row)
+    summary = []
+    for group in members.values():
+        first = group[0]
+        values = {name: first[name] for name in GROUP_COLUMNS} | {
+            end: "drawn" if first["start_goal_drawn"] else
+            [first[f"{end}_{a}"] for a in AXES] for end in ("start", "goal")}
+        summary.append(values | rate(group)
+                       | {f"median_{name}": _median(group, name) for name in MEDIAN_COLUMNS})
+    return summary
+
+
+def summary(rows: Sequence[dict[str, Any]], expected: int) -> dict[str, Any]:
+    """The whole summary: the overall rate over ``rows``, how many of the ``expected``
+    missions they are, and :func:`groups`."""
+    return {"missions": expected, "finished": len(rows), "complete": len(rows) == expected,
+            **rate(rows), "groups": groups(rows)}
+
+
+def write_summary(content: dict[str, Any], path: Path) -> None:
+    """Write :func:`summary`'s ``content`` as JSON, atomically."""
+    with atomic_output(path) as tmp:
+        tmp.write_text(json.dumps(content, indent=2, allow_nan=False) + "\n", encoding="utf-8")

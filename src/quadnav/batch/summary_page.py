@@ -1,0 +1,254 @@
+"""``summary.html``: one self-contained page over a batch's results, readable offline.
+
+* the success rate per map and speed as a heat map, one panel per combination of the
+  other grid values (wind, gusts, spread, planner, gains), each cell with its Wilson 95 %
+  interval;
+* box plots of the RMS tracking error, the least clearance and the trajectory duration
+  of each group's flown missions;
+* the table of the groups (``summary.json``).
+
+Images are embedded PNGs and the style inline (the report's, :mod:`quadnav.report.html_report`).
+"""
+
+from __future__ import annotations
+
+import html
+import inspect
+import math
+import os
+import textwrap
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from quadnav import __version__
+from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
+from quadnav.files import atomic_output
+from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
+from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
+from quadnav.world.builtin import is_builtin_spec
+
+SUMMARY_HTML = "summary.html"
+#: Figure resolution, dots per inch, and the widths of the figures, inches (shown about
+#: 1100 pixels wide, the report's width).
+DPI = 120
+WIDTH = 9.0
+#: Grid values that give a heat map its panels (maps and speeds are its rows and columns).
+PANEL_COLUMNS = ("wind_x", "wind_y", "wind_z", "gusts", "spread", "planner", "gains")
+#: Distributions drawn: column, axis label, scale to the unit shown.
+DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking\nerror (cm)", 100.0),
+                 ("min_clearance_m", "least clearance\nfrom a block (m)", 1.0),
+                 ("trajectory_duration_s", "trajectory\nduration (s)", 1.0))
+#: Characters per line of a group's label beside the box plots.
+LABEL_WIDTH = 42
+
+
+#: Matplotlib's way to lay box plots on their side (``vert`` before 3.10).
+HORIZONTAL = ({"orientation": "horizontal"}
+              if "orientation" in inspect.signature(Axes.boxplot).parameters else {"vert": False})
+
+
+def short_maps(names: Sequence[str]) -> dict[str, str]:
+    """Short labels of map names: files relative to the folder they share, built-in world
+    specs as they are."""
+    files = [name for name in names if not is_builtin_spec(name)]
+    common = os.path.commonpath([os.path.dirname(name) for name in files]) if files else ""
+    return {name: name if is_builtin_spec(name) or not common
+            else os.path.relpath(name, common) for name in names}
+
+
+def _speed(value: float | None) -> str:
+    return "max" if value is None else f"{value:g} m/s"
+
+
+def _percent(value: float | None) -> str:
+    return "—" if value is None else f"{100 * value:.0f}"
+
+
+class _Groups:
+    """The groups of a summary with the labels the page shows for them."""
+
+    def __init__(self, summary_groups: list[dict[str, Any]]) -> None:
+        self.groups = summary_groups
+        self.maps = short_maps([g["map"] for g in summary_groups])
+        self.varying = [name for name in (*GROUP_COLUMNS, "start", "goal")
+                        if len({json_key(g[name]) for g in summary_groups}) > 1]
+
+    def row_label(self, group: dict[str, Any]) -> str:
+        """Map (and its query when the map is flown with several)."""
+        label = self.maps[group["map"]]
+        same_map = [g for g in self.groups if g["map"] == group["map"]]
+        queries = {json_key([g[n] for n in ("start", "goal", "margin_m")]) for g in same_map}
+        if len(queries) > 1:
+            label += " " + _query(group)
+        return label
+
+    def panel_label(self, group: dict[str, Any]) -> str:
+        """The panel's grid values, those that vary."""
+        parts = []
+        if any(n in self.varying for n in ("wind_x", "wind_y", "wind_z")):
+            parts.append(f"wind ({group['wind_x']:g}, {group['wind_y']:g}, "
+                         f"{group['wind_z']:g}) N")
+        if "gusts" in self.varying:
+            parts.append(f"gusts {group['gusts']:g} N")
+        if "spread" in self.varying:
+            parts.append(f"spread {group['spread']}")
+        if "planner" in self.varying:
+            parts.append(group["planner"])
+        if "gains" in self.varying:
+            parts.append(f"gains {Path(group['gains']).name}")
+        return ", ".join(parts)
+
+    def label(self, group: dict[str, Any]) -> str:
+        """Everything that tells the group apart from the others."""
+        parts = [self.row_label(group)]
+        if "speed" in self.varying:
+            parts.append(_speed(group["speed"]))
+        panel = self.panel_label(group)
+        return ", ".join(parts + ([panel] if panel else []))
+
+
+def json_key(value: Any) -> str:
+    """A hashable text of a JSON value."""
+    return repr(value)
+
+
+def _query(group: dict[str, Any]) -> str:
+    if group["start"] == "drawn":
+        return f"(drawn start, goal; margin {group['margin_m']:g} m)"
+    start, goal = (", ".join(f"{v:g}" for v in group[end]) for end in ("start", "goal"))
+    return f"({start} to {goal}; margin {group['margin_m']:g} m)"
+
+
+def heat_map(labels: _Groups) -> Figure:
+    """Success rate per map (rows) and speed (columns), one panel per combination of the
+    other grid values; each cell shows the rate and its 95 % interval in percent."""
+    panels: dict[str, list[dict[str, Any]]] = {}
+    for group in labels.groups:
+        panels.setdefault(labels.panel_label(group), []).append(group)
+    rows = list(dict.fromkeys(labels.row_label(g) for g in labels.groups))
+    speeds = sorted({g["speed"] for g in labels.groups},
+                    key=lambda v: math.inf if v is None else v)
+    columns = min(len(panels), max(1, int(WIDTH // (1.6 + 1.2 * len(speeds)))))
+    lines = math.ceil(len(panels) / columns)
+    label_width = 0.075 * max(len(r) for r in rows) + 0.3
+    cell_width = (WIDTH - columns * label_width) / (columns * len(speeds))
+    fig = Figure(figsize=(WIDTH, lines * (0.8 + 0.42 * len(rows)) + 0.6), dpi=DPI,
+                 layout="constrained")
+    axes = np.atleast_1d(fig.subplots(lines, columns, squeeze=False)).ravel()
+    image = None
+    for ax, (title, groups) in zip(axes, panels.items(), strict=False):
+        rates = np.full((len(rows), len(speeds)), np.nan)
+        for group in groups:
+            i, j = rows.index(labels.row_label(group)), speeds.index(group["speed"])
+            rates[i, j] = group["success_rate"]
+            text = (f"{_percent(group['success_rate'])} %\n[{_percent(group['ci_low'])}, "
+                    f"{_percent(group['ci_high'])}]")
+            ax.text(j, i, text, ha="center", va="center", fontsize=SMALL_FONT if
+                    cell_width > 0.9 else SMALL_FONT - 2,
+                    color="black" if 0.25 < group["success_rate"] < 0.95 else "white")
+        image = ax.imshow(rates, cmap="RdYlGn", vmin=0.0, vmax=1.0, aspect="auto")
+        ax.set_xticks(range(len(speeds)), [_speed(v) for v in speeds], fontsize=SMALL_FONT)
+        ax.set_yticks(range(len(rows)), rows, fontsize=SMALL_FONT)
+        ax.tick_params(length=0)
+        if title:
+            ax.set_title(title, fontsize=TITLE_FONT)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    bar = fig.colorbar(image, ax=axes[:len(panels)].tolist(), shrink=0.8, pad=0.02)
+    bar.set_label("success rate", fontsize=SMALL_FONT)
+    bar.ax.tick_params(labelsize=SMALL_FONT)
+    return fig
+
+
+def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]) -> Figure:
+    """Box plots, one per group, of the RMS tracking error, the least clearance and the
+    trajectory duration of its flown missions."""
+    members: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        members.setdefault(json_key(group_values(row)), []).append(row)
+    names = [textwrap.fill(labels.label(g), LABEL_WIDTH) for g in labels.groups]
+    keys = list(members)
+    lines = max(name.count("\n") + 1 for name in names)
+    fig = Figure(figsize=(WIDTH, 1.0 + (0.12 + 0.16 * lines) * len(names)), dpi=DPI,
+                 layout="constrained")
+    axes = fig.subplots(1, len(DISTRIBUTIONS), sharey=True)
+    positions = np.arange(len(names))[::-1]
+    for ax, (column, title, scale) in zip(axes, DISTRIBUTIONS, strict=True):
+        data = [[scale * row[column] for row in members[key]
+                 if row[column] is not None and math.isfinite(row[column])] for key in keys]
+        filled = [k for k, values in enumerate(data) if values]
+        if filled:
+            ax.boxplot([data[k] for k in filled], positions=positions[filled], widths=0.6,
+                       flierprops={"markersize": 3}, **HORIZONTAL)
+        ax.set_xlabel(title, fontsize=SMALL_FONT)
+        ax.tick_params(labelsize=SMALL_FONT)
+        ax.grid(axis="x", alpha=0.3)
+    axes[0].set_yticks(positions, names)
+    axes[0].set_ylim(-0.7, len(names) - 0.3)
+    return fig
+
+
+def _cell(value: Any) -> str:
+    if value is None:
+        return "—"
+    if isinstance(value, float):
+        return f"{value:.3g}"
+    return html.escape(str(value))
+
+
+def groups_table(labels: _Groups) -> str:
+    """The groups as an HTML table: what tells them apart, n, successes, the rate and its
+    interval (percent), refused missions and the medians."""
+    header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
+              *(f"median {name}" for name in MEDIAN_COLUMNS))
+    rows = [(html.escape(labels.label(g)), str(g["n"]), str(g["successes"]),
+             _percent(g["success_rate"]),
+             f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
+             *(_cell(g[f"median_{name}"]) for name in MEDIAN_COLUMNS))
+            for g in labels.groups]
+    return html_table(header, rows, -1)
+
+
+def summary_html(summary: dict[str, Any], rows: Sequence[dict[str, Any]], folder: Path) -> str:
+    """The page over ``summary`` (:func:`~quadnav.batch.summary.summary`) and the ``rows``
+    it summarises, naming ``folder`` as the batch's."""
+    labels = _Groups(summary["groups"])
+    state = ("" if summary["complete"] else
+             f" (stopped: {summary['finished']} of {summary['missions']} missions finished; "
+             "running the batch again finishes it)")
+    overall = (f"<p><b>{summary['successes']} of {summary['finished']}</b> missions reached "
+               f"the goal with no contact: {_percent(summary['success_rate'])} % (95 % "
+               f"interval {_percent(summary['ci_low'])}&ndash;{_percent(summary['ci_high'])} %)"
+               f"{html.escape(state)}; {summary['errors']} refused (bad query or settings)."
+               "</p>")
+    body = [f"<h1>quadnav batch summary</h1><p class=\"muted\">folder "
+            f"{html.escape(str(folder))}; written by quadnav {__version__}. A success is a "
+            "mission that reached the goal within the tolerance with no contact; a refused "
+            "mission counts as a failure. Intervals are Wilson 95 % score intervals.</p>",
+            overall]
+    if labels.groups:
+        body += ["<h2>Success rate</h2>",
+                 figure_html(png_bytes(heat_map(labels)),
+                             "Share of missions that reached the goal, per map and speed, in "
+                             "percent, with its 95 % interval in brackets."),
+                 "<h2>Distributions</h2>",
+                 figure_html(png_bytes(distributions(labels, rows)),
+                             "Per group, over its flown missions: the RMS tracking error, the "
+                             "least clearance of the vehicle's centre from a block, and the "
+                             "trajectory's duration (box: quartiles; whiskers: 1.5 times the "
+                             "box; dots: beyond)."),
+                 "<h2>Groups</h2>", groups_table(labels)]
+    return html_page("quadnav batch summary", "".join(body))
+
+
+def write_summary_page(summary: dict[str, Any], rows: Sequence[dict[str, Any]],
+                       folder: Path) -> None:
+    """Write ``folder``/summary.html, atomically."""
+    text = summary_html(summary, rows, folder)
+    with atomic_output(folder / SUMMARY_HTML) as tmp:
+        tmp.write_text(text, encoding="utf-8")

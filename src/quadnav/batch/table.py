@@ -1,0 +1,246 @@
+"""The results table of a batch: its fixed schema, the row of a mission, the journal that
+keeps every finished row, and the Parquet and CSV files.
+
+One row per mission: its key, its grid values, the factors of its flown vehicle, where
+its start and goal came from, every key of :meth:`~quadnav.mission.Mission.metrics`
+(``start`` and ``goal`` as ``start_x`` ... ``goal_z``), what ended the search, and
+``error``: why a mission was refused (None when it flew or found no path). The schema
+(:data:`COLUMNS`) is explicit, so the Parquet and CSV files have the same columns and types
+whatever rows failed.
+
+The journal is ``DIR/results.csv`` itself: each finished row is appended and flushed at
+once, so a run stopped by any means, SIGKILL included, keeps every finished row (a last
+line cut short by a kill is dropped when the journal is read back). At the end (or on a
+stop) ``results.csv`` is rewritten whole in the grid's order and ``results.parquet``
+written, both atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+import numpy as np
+
+from quadnav.errors import QuadnavError
+from quadnav.files import atomic_output
+
+if TYPE_CHECKING:
+    from quadnav.batch.grid import MissionSpec
+    from quadnav.mission import Mission
+
+STR, FLOAT, INT, BOOL = "string", "float64", "int64", "bool"
+AXES = ("x", "y", "z")
+
+#: The grid values of a mission and its flown vehicle's factors.
+GRID_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("mission_key", STR), ("map", STR), ("seed", INT), ("speed", FLOAT),
+    ("wind_x", FLOAT), ("wind_y", FLOAT), ("wind_z", FLOAT), ("gusts", FLOAT),
+    ("spread", STR), ("spread_mass", FLOAT), ("spread_thrust", FLOAT), ("spread_drag", FLOAT),
+    ("mass_factor", FLOAT), ("thrust_factor", FLOAT), ("drag_factor", FLOAT),
+    ("planner", STR), ("gains", STR), ("start_goal_drawn", BOOL),
+)
+#: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
+METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
+    ("success", BOOL), *((f"start_{a}", FLOAT) for a in AXES),
+    *((f"goal_{a}", FLOAT) for a in AXES), ("margin_m", FLOAT), ("start_leg_m", FLOAT),
+    ("goal_leg_m", FLOAT), ("vehicle", STR), ("speed_m_s", FLOAT), ("path_found", BOOL),
+    ("path_length_m", FLOAT), ("path_vertices", INT), ("planning_time_s", FLOAT),
+    ("trajectory_time_s", FLOAT), ("trajectory_duration_s", FLOAT),
+    ("trajectory_margin_m", FLOAT), ("trajectory_leg_margin_m", FLOAT),
+    ("flight_margin_m", FLOAT), ("flight_leg_margin_m", FLOAT), ("collision", BOOL),
+    ("reached_goal", BOOL), ("ending", STR), ("contact_time_s", FLOAT), ("contact_block", INT),
+    ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
+    ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
+    ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),
+    ("sim_wall_time_s", FLOAT), ("real_time_factor", FLOAT),
+)
+#: Every column, in order, with its type.
+COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("error", STR))
+NAMES = tuple(name for name, _ in COLUMNS)
+TYPES = dict(COLUMNS)
+#: Columns of wall time, which differ between runs of the same mission.
+WALL_TIME_COLUMNS = ("planning_time_s", "trajectory_time_s", "sim_wall_time_s",
+                     "real_time_factor")
+RESULTS_CSV = "results.csv"
+RESULTS_PARQUET = "results.parquet"
+
+
+def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn: bool,
+                flown: Mission | None, error: str | None = None,
+                start: np.ndarray | None = None, goal: np.ndarray | None = None,
+                margin: float | None = None) -> dict[str, Any]:
+    """The row of ``mission``: its grid values, the spread ``factors`` (mass, thrust,
+    drag) and whether its start and goal were ``drawn``; then the metrics of the mission
+    ``flown``, or for a refused mission (``flown`` None) the ``error`` and what is known of
+    its query (``start``, ``goal`` (3,) m or None, ``margin`` m)."""
+    row: dict[str, Any] = dict.fromkeys(NAMES)
+    spread = mission.spread
+    row |= {
+        "mission_key": mission.key, "map": mission.map.map, "seed": mission.seed,
+        "speed": mission.speed, "gusts": mission.gusts, "spread": spread.label,
+        "spread_mass": spread.mass, "spread_thrust": spread.thrust, "spread_drag": spread.drag,
+        "planner": mission.planner, "gains": mission.gains, "start_goal_drawn": drawn,
+    }
+    row |= {f"wind_{a}": w for a, w in zip(AXES, mission.wind, strict=True)}
+    row |= dict(zip(("mass_factor", "thrust_factor", "drag_factor"), factors, strict=True))
+    if flown is None:
+        row |= {"success": False, "path_found": False, "collision": False,
+                "reached_goal": False, "margin_m": margin,
+                "error": None if error is None else one_line(error)}
+        row |= _point_columns("start", start) | _point_columns("goal", goal)
+        return row
+    metrics = flown.metrics()
+    unknown = set(metrics) - set(NAMES) - {"start", "goal"}
+    if unknown:
+        raise RuntimeError(f"metrics missing from the batch table schema: {sorted(unknown)}")
+    row |= {key: value for key, value in metrics.items()
+            if key not in ("start", "goal", "map", "seed", "planner")}
+    row |= _point_columns("start", metrics["start"]) | _point_columns("goal", metrics["goal"])
+    row["search_stopped_by"] = flown.plan.stats.stopped_by
+    return row
+
+
+def _point_columns(name: str, point: Sequence[float] | np.ndarray | None) -> dict[str, Any]:
+    values = [None] * 3 if point is None else [float(v) for v in point]
+    return {f"{name}_{a}": v for a, v in zip(AXES, values, strict=True)}
+
+
+# ------------------------------------------------------------------------------ CSV text
+def _text(value: Any) -> str:
+    """A value as CSV text: empty for None, ``true``/``false``, floats exactly (repr)."""
+    if value is None:
+        return ""
+    if isinstance(value, bool | np.bool_):
+        return "true" if value else "false"
+    if isinstance(value, float | np.floating):
+        return repr(float(value))
+    return one_line(str(value))
+
+
+def one_line(text: str) -> str:
+    """``text`` with line breaks turned into spaces: a row is one line of the journal."""
+    return text.replace("\r", " ").replace("\n", " ")
+
+
+#: The Python type of each column type.
+PYTHON_TYPES = {STR: str, FLOAT: float, INT: int, BOOL: bool}
+
+
+def _parse(text: str, kind: str) -> Any:
+    """A value of type ``kind`` from its CSV text (:func:`_text`)."""
+    if text == "":
+        return None
+    if kind == BOOL and text not in ("true", "false"):
+        raise ValueError(f"expected true or false, got {text!r}")
+    return text == "true" if kind == BOOL else PYTHON_TYPES[kind](text)
+
+
+def csv_line(row: dict[str, Any]) -> str:
+    """One row as a line of CSV (with its newline)."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow(_text(row[name]) for name in NAMES)
+    return buffer.getvalue()
+
+
+HEADER = ",".join(NAMES) + "\n"
+
+
+def read_rows(path: Path) -> list[dict[str, Any]]:
+    """The rows of a results.csv (or journal); a last line without its newline (cut short
+    by a kill) is dropped. QuadnavError naming the file and line if it is not one."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
+    if not text.startswith(HEADER):
+        raise QuadnavError(f"{path}:1: expected the header of a quadnav batch table "
+                           f"({len(NAMES)} columns, from {NAMES[0]} to {NAMES[-1]})")
+    body = text[len(HEADER):]
+    body = body[:body.rfind("\n") + 1]
+    rows = []
+    for number, fields in enumerate(csv.reader(io.StringIO(body)), start=2):
+        try:
+            if len(fields) != len(NAMES):
+                raise ValueError(f"expected {len(NAMES)} fields, got {len(fields)}")
+            rows.append({name: _parse(field, TYPES[name])
+                         for name, field in zip(NAMES, fields, strict=True)})
+        except ValueError as error:
+            raise QuadnavError(f"{path}:{number}: {error}") from None
+    return rows
+
+
+class Journal:
+    """``results.csv`` open for appending: :meth:`append` writes and flushes a row."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        if not path.exists():
+            with atomic_output(path) as tmp:
+                tmp.write_text(HEADER, encoding="utf-8")
+        else:  # drop a line cut short by a kill, so that the next row starts a line
+            with path.open("r+b") as file:
+                data = file.read()
+                file.truncate(data.rfind(b"\n") + 1)
+        self._file: IO[str] | None = path.open("a", encoding="utf-8")
+
+    def append(self, row: dict[str, Any]) -> None:
+        """Write ``row`` and flush it to the operating system."""
+        assert self._file is not None
+        self._file.write(csv_line(row))
+        self._file.flush()
+
+    def close(self) -> None:
+        """Close the file (and sync it to disk)."""
+        if self._file is not None:
+            self._file.flush()
+            os.fsync(self._file.fileno())
+            self._file.close()
+            self._file = None
+
+
+def write_tables(rows: Iterable[dict[str, Any]], folder: Path) -> list[str]:
+    """Write ``rows`` to ``folder``/results.csv and results.parquet, each atomically;
+    returns the names written."""
+    rows = list(rows)
+    with atomic_output(folder / RESULTS_CSV) as tmp:
+        tmp.write_text(HEADER + "".join(csv_line(row) for row in rows), encoding="utf-8")
+    write_parquet(rows, folder / RESULTS_PARQUET)
+    return [RESULTS_PARQUET, RESULTS_CSV]
+
+
+def write_parquet(rows: list[dict[str, Any]], path: Path) -> None:
+    """The rows as a Parquet file with the schema :data:`COLUMNS`, atomically."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema = pa.schema([(name, pa.from_numpy_dtype(np.dtype(kind)) if kind != STR
+                         else pa.string()) for name, kind in COLUMNS])
+    columns = {name: [_plain(row[name], TYPES[name]) for row in rows] for name in NAMES}
+    table = pa.Table.from_pydict(columns, schema=schema)
+    with atomic_output(path) as tmp:
+        pq.write_table(table, tmp)
+
+
+def _plain(value: Any, kind: str) -> Any:
+    """``value`` as the plain Python type of its column (numpy scalars converted)."""
+    return None if value is None else PYTHON_TYPES[kind](value)
+
+
+def same_row(a: dict[str, Any], b: dict[str, Any], ignore: Sequence[str] = WALL_TIME_COLUMNS
+             ) -> bool:
+    """Whether two rows agree on every column but ``ignore`` (NaN equals NaN)."""
+    for name in NAMES:
+        if name in ignore:
+            continue
+        x, y = a[name], b[name]
+        if isinstance(x, float) and isinstance(y, float) and math.isnan(x) and math.isnan(y):
+            continue
+        if x != y:
+            return False
+    return True

@@ -1,0 +1,173 @@
+"""``quadnav batch``: many missions over a grid, on local workers or on Ray, into a table
+and a summary; ``quadnav refly``: one mission of a batch again, with figures."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from tqdm import tqdm
+
+from quadnav.batch.grid import BatchSpec, parse_spec, read_spec
+from quadnav.batch.run import BatchRun
+from quadnav.batch.summary import rate
+from quadnav.cli.args import (
+    acceleration,
+    add_margin_argument,
+    add_start_goal_arguments,
+    number_in,
+    speed_or_max,
+)
+from quadnav.cli.launch import interrupted_exit_code
+from quadnav.errors import QuadnavError
+from quadnav.limits import Range
+from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
+from quadnav.planning import planner_names
+from quadnav.runfolder import check_output_folder
+from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+
+#: Seeds of the simple case when --seeds is not given.
+DEFAULT_SEEDS = 10
+#: Local worker processes.
+WORKERS = Range(1, 1024, whole=True)
+#: Flags that set the grid or the fixed settings: a TOML spec sets them instead.
+GRID_FLAGS = {"seeds": "--seeds", "speeds": "--speeds", "accel": "--accel",
+              "margin": "--margin", "start": "--start", "goal": "--goal",
+              "start_goal": "--start-goal", "params": "--params", "gains": "--gains",
+              "planner": "--planner"}
+
+
+def batch_spec(args: argparse.Namespace) -> BatchSpec:
+    """The spec: the TOML file given, or the maps and flags of the simple case."""
+    inputs = args.inputs
+    toml = [name for name in inputs if name.lower().endswith(".toml")]
+    if toml:
+        if len(inputs) > 1:
+            raise QuadnavError(f"{toml[0]}: a spec file comes alone, without maps: list the "
+                               "maps in its maps key")
+        given = [flag for key, flag in GRID_FLAGS.items() if getattr(args, key) is not None]
+        if given:
+            raise QuadnavError(f"{given[0]}: set it in the spec {toml[0]} instead (a spec "
+                               "holds the whole grid and its settings)")
+        return read_spec(toml[0])
+    query = {key: getattr(args, key) for key in ("start", "goal", "start_goal")
+             if getattr(args, key) is not None}
+    table = {"maps": [{"map": name} | query for name in inputs],
+             "seeds": DEFAULT_SEEDS if args.seeds is None else args.seeds,
+             "speeds": [DEFAULT_SPEED] if args.speeds is None else
+             ["max" if v is None else v for v in args.speeds],
+             "vehicle": args.params or DEFAULT_PRESET,
+             "planners": [args.planner or "rrtstar"]}
+    optional = {"accel": args.accel, "margin": args.margin,
+                "gains": None if args.gains is None else [args.gains]}
+    table |= {key: value for key, value in optional.items() if value is not None}
+    return parse_spec(table, Path.cwd(), "the command line")
+
+
+class _Progress:
+    """What a batch says as it runs: one line once its workers are ready, then a progress
+    bar of the missions done, with the ETA and the running success rate."""
+
+    def __init__(self, run: BatchRun, where: str, quiet: bool) -> None:
+        self.run = run
+        self.where = where
+        self.quiet = quiet
+        self.bar: tqdm | None = None
+
+    def started(self, workers: int) -> None:
+        run = self.run
+        print(f"{len(run.missions)} missions, {len(run.rows)} already in {run.folder}; flying "
+              f"{len(run.todo)} on {workers} {self.where.format(s='s' if workers > 1 else '')}",
+              flush=True)
+        self.bar = tqdm(total=len(run.todo), desc="batch", unit="mission", disable=self.quiet,
+                        file=sys.stderr, dynamic_ncols=True)
+
+    def row(self, row: dict) -> None:
+        finished = rate(list(self.run.rows.values()))
+        assert self.bar is not None
+        self.bar.set_postfix_str(f"success {100 * finished['success_rate']:.1f} % of "
+                                 f"{finished['n']}", refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def batch(args: argparse.Namespace) -> int:
+    """Run the batch; exit 0 once every mission has a row, whatever the success rate."""
+    spec = batch_spec(args)
+    folder = check_output_folder(args.output)
+    run = BatchRun(spec, folder, restart=args.restart)
+    done_before = len(run.rows)
+    where = ("local worker{s}" if args.ray is None else
+             f"CPU{{s}} of the Ray cluster at {args.ray}" if args.ray else "CPU{s} of a local Ray")
+    if not run.todo:
+        print(f"{len(run.missions)} missions, all already in {folder}")
+    progress = _Progress(run, where, args.quiet)
+    began = time.perf_counter()
+    try:
+        written = run.run(workers=args.workers, ray=args.ray is not None,
+                          address=args.ray or None, on_start=progress.started,
+                          on_row=progress.row)
+    except KeyboardInterrupt as interrupt:
+        progress.close()
+        print(f"quadnav: stopped: kept {len(run.rows)} of {len(run.missions)} missions in "
+              f"{folder / 'results.csv'}; run the same command again to resume",
+              file=sys.stderr)
+        return interrupted_exit_code(interrupt)
+    finally:
+        progress.close()
+    seconds = time.perf_counter() - began
+    overall = rate(run.finished)
+    print(f"{overall['successes']} of {overall['n']} missions reached the goal with no "
+          f"contact: {100 * overall['success_rate']:.1f} % (95 % interval "
+          f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
+          f"{overall['errors']} refused")
+    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
+    print("wrote " + ", ".join(str(folder / name) for name in written))
+    return 0
+
+
+def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``quadnav batch`` on the top-level subparsers."""
+    p = subparsers.add_parser(
+        "batch", help="fly many missions (maps x seeds x speeds ...) into a table and summary",
+        description="Monte-Carlo evaluation: fly every mission of a grid on local worker "
+                    "processes (or a Ray cluster) without figures, and write DIR/results.parquet "
+                    "and DIR/results.csv (one row per mission), DIR/summary.json (success rate "
+                    "per group with Wilson 95 % intervals) and DIR/summary.html. Give maps and "
+                    "flags for the simple case, or one TOML spec for the full grid (see the "
+                    "README). A re-run into the same DIR skips the missions already done; "
+                    "Ctrl-C keeps every finished row. Exit 0 when every mission has a row, 2 on "
+                    "bad input, 130/143 when stopped.")
+    p.add_argument("inputs", nargs="+", metavar="MAP|SPEC.toml",
+                   help="map files or built-in world specs, or one TOML spec")
+    p.add_argument("--seeds", type=number_in(Range(1, 1_000_000, whole=True)), metavar="N",
+                   help=f"seeds 0 to N - 1 for every map and speed (default: {DEFAULT_SEEDS})")
+    p.add_argument("--speeds", type=speed_or_max, nargs="+", metavar="V|max",
+                   help=f"top speeds, m/s, or max (default: {DEFAULT_SPEED:g})")
+    p.add_argument("--accel", type=acceleration, metavar="A",
+                   help=f"largest acceleration, m/s^2 (default: {DEFAULT_ACCELERATION:g})")
+    add_margin_argument(p)
+    add_start_goal_arguments(p)
+    p.add_argument("--params", metavar="NAME|FILE",
+                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
+                        f"(default: {DEFAULT_PRESET})")
+    p.add_argument("--gains", metavar="FILE", help="controller gains TOML file")
+    p.add_argument("--planner", metavar="NAME",
+                   help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    p.add_argument("--workers", type=number_in(WORKERS), metavar="N",
+                   help=f"local worker processes, {WORKERS.describe()} (default: one per CPU)")
+    p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
+                   help="run on the Ray cluster at ADDRESS (e.g. HEAD:6379); without one, on "
+                        "a local Ray started for the run (needs quadnav[ray])")
+    p.add_argument("--restart", action="store_true",
+                   help="replace a different batch already in DIR instead of refusing")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-o", "--output", default="batch", metavar="DIR",
+                   help="folder to write into, created if needed (default: batch)")
+    p.set_defaults(handler=batch)
+
