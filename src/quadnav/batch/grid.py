@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from quadnav.config import read_toml
+from quadnav.control.gains import course_gain_names
 from quadnav.errors import QuadnavError
 from quadnav.limits import (
     ACCELERATION,
@@ -368,9 +369,10 @@ def _file(value: Any, folder: Path, key: str, what: str, src: _Source) -> str:
 
 
 def _gains(value: Any, folder: Path, src: _Source) -> str:
-    if value == DEFAULT_GAINS:
+    if value == DEFAULT_GAINS or value in course_gain_names():
         return value
-    return _file(value, folder, "gains", f"{DEFAULT_GAINS!r} or a gains TOML file", src)
+    return _file(value, folder, "gains", f"{DEFAULT_GAINS!r}, a course gain table "
+                 f"({', '.join(course_gain_names())}) or a gains TOML file", src)
 
 
 def _map_name(value: Any, folder: Path, key: str, src: _Source) -> str:

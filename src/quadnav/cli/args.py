@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from quadnav.control.gains import Gains, load_gains
+from quadnav.control.gains import Gains, course_gain_names, load_gains
 from quadnav.limits import (
     ACCELERATION,
     COORDINATE,
@@ -197,9 +197,10 @@ def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
                         help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
                              f"(default: {DEFAULT_PRESET})")
-    parser.add_argument("--gains", metavar="FILE",
-                        help="controller gains TOML file; keys it leaves out keep the gains "
-                             "tuned for the vehicle")
+    parser.add_argument("--gains", metavar="NAME|FILE",
+                        help="controller gains: a TOML file, or a course gain table ("
+                             f"{', '.join(course_gain_names())}); keys it leaves out keep "
+                             "the gains tuned for the vehicle")
 
 
 def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:

@@ -156,7 +156,8 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--params", metavar="NAME|FILE",
                    help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
                         f"(default: {DEFAULT_PRESET})")
-    p.add_argument("--gains", metavar="FILE", help="controller gains TOML file")
+    p.add_argument("--gains", metavar="NAME|FILE",
+                   help="controller gains: a TOML file or a course gain table (as in fly)")
     p.add_argument("--planner", metavar="NAME",
                    help=f"one of {', '.join(planner_names())} (default: rrtstar)")
     p.add_argument("--workers", type=number_in(WORKERS), metavar="N",

@@ -125,7 +125,9 @@ def console() -> NoReturn:
     Everything the command writes is closed by then; the output streams are flushed, and
     the interpreter's own clean-up (a third of a second of finalizers for the compiled
     kernels and plotting) is skipped, with stop signals held from the moment the
-    command returns, so that none arrives half way."""
+    command returns, so that none arrives half way. Output piped into a reader that
+    stops early (``quadnav worlds | head``) ends the command as SIGPIPE would, exit 141,
+    without a traceback."""
     # Each increment comes before any call, where Python could raise a stop.
     try:
         code = main()
@@ -133,7 +135,13 @@ def console() -> NoReturn:
     except KeyboardInterrupt as interrupt:
         _stop_handler.holding += 1
         code = report_interrupt(interrupt)
-    sys.stdout.flush()
+    except BrokenPipeError:  # the reader of the output went away (``| head``): as SIGPIPE
+        _stop_handler.holding += 1
+        os._exit(128 + signal.SIGPIPE)
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os._exit(128 + signal.SIGPIPE)
     sys.stderr.flush()
     os._exit(code)
 
