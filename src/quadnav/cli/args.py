@@ -251,3 +251,26 @@ def add_run_output_arguments(parser: argparse.ArgumentParser, folder: str, repor
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
     parser.add_argument("-o", "--output", default=folder, metavar="DIR",
                         help=f"folder to write into, created if needed (default: {folder})")
+
+
+#: Local worker processes of ``batch`` and ``tune``.
+WORKERS = Range(1, 1024, whole=True)
+
+
+def add_executor_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--workers N`` and ``--ray [ADDRESS]``: where the jobs of ``batch`` and ``tune``
+    run (:func:`quadnav.batch.executor.open_executor`)."""
+    parser.add_argument("--workers", type=number_in(WORKERS), metavar="N",
+                        help=f"local worker processes, {WORKERS.describe()} (default: one per "
+                             "CPU)")
+    parser.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
+                        help="run on the Ray cluster at ADDRESS (e.g. HEAD:6379); without one, "
+                             "on a local Ray started for the run (needs quadnav[ray])")
+
+
+def workers_description(args: argparse.Namespace) -> str:
+    """``local worker{s}``, ``CPU{s} of a local Ray`` or ``CPU{s} of the Ray cluster at
+    ADDRESS``, to be formatted with the plural ``s``."""
+    if args.ray is None:
+        return "local worker{s}"
+    return f"CPU{{s}} of the Ray cluster at {args.ray}" if args.ray else "CPU{s} of a local Ray"

@@ -15,10 +15,12 @@ from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import rate
 from quadnav.cli.args import (
     acceleration,
+    add_executor_arguments,
     add_margin_argument,
     add_start_goal_arguments,
     number_in,
     speed_or_max,
+    workers_description,
 )
 from quadnav.cli.launch import interrupted_exit_code
 from quadnav.errors import QuadnavError
@@ -30,8 +32,6 @@ from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
 
 #: Seeds of the simple case when --seeds is not given.
 DEFAULT_SEEDS = 10
-#: Local worker processes.
-WORKERS = Range(1, 1024, whole=True)
 #: Flags that set the grid or the fixed settings: a TOML spec sets them instead.
 GRID_FLAGS = {"seeds": "--seeds", "speeds": "--speeds", "accel": "--accel",
               "margin": "--margin", "start": "--start", "goal": "--goal",
@@ -102,8 +102,7 @@ def batch(args: argparse.Namespace) -> int:
     folder = check_output_folder(args.output)
     run = BatchRun(spec, folder, restart=args.restart)
     done_before = len(run.rows)
-    where = ("local worker{s}" if args.ray is None else
-             f"CPU{{s}} of the Ray cluster at {args.ray}" if args.ray else "CPU{s} of a local Ray")
+    where = workers_description(args)
     if not run.todo:
         print(f"{len(run.missions)} missions, all already in {folder}")
     progress = _Progress(run, where, args.quiet)
@@ -160,11 +159,7 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                    help="controller gains: a TOML file or a course gain table (as in fly)")
     p.add_argument("--planner", metavar="NAME",
                    help=f"one of {', '.join(planner_names())} (default: rrtstar)")
-    p.add_argument("--workers", type=number_in(WORKERS), metavar="N",
-                   help=f"local worker processes, {WORKERS.describe()} (default: one per CPU)")
-    p.add_argument("--ray", nargs="?", const="", metavar="ADDRESS",
-                   help="run on the Ray cluster at ADDRESS (e.g. HEAD:6379); without one, on "
-                        "a local Ray started for the run (needs quadnav[ray])")
+    add_executor_arguments(p)
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

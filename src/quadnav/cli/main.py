@@ -27,6 +27,7 @@ from quadnav.cli.report_command import add_report_command
 from quadnav.cli.tello_command import add_tello_command
 from quadnav.cli.track_command import add_track_command
 from quadnav.cli.traj_command import add_traj_command
+from quadnav.cli.tune_command import add_tune_command
 from quadnav.cli.view_command import add_view_command
 from quadnav.cli.worlds_command import add_references_command, add_worlds_command
 from quadnav.errors import QuadnavError
@@ -53,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_track_command(commands)
     add_batch_command(commands)
     add_refly_command(commands)
+    add_tune_command(commands)
     add_animate_command(commands)
     add_blender_command(commands)
     add_map_commands(commands)

@@ -1,0 +1,163 @@
+"""What a tuning run leaves in its folder: :func:`write_outputs`.
+
+* ``gains.toml`` — the tuned gains, every key (``--gains DIR/gains.toml`` flies them);
+* ``tune.json`` — the settings, the study, the best trial, each gain set's scores on the
+  training and held-out sets and every flight's metrics;
+* ``trials.csv`` — one row per completed trial: its number, objective and point;
+* ``report.html`` — one offline page: the comparison on both sets, the objective against
+  the trials, the tracking error of every held-out flight per gain set, the tuned values
+  against the starting ones.
+
+All of them reach the folder together (:func:`~quadnav.runfolder.replaced_folder`); the
+study's own storage (``study.db``) is left as it is.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+from quadnav.config import toml_text
+from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
+from quadnav.runfolder import replaced_folder
+from quadnav.trajectory.export import csv_table
+from quadnav.tune.evaluate import (
+    FAILURE_PENALTY,
+    OVERSHOOT_ALLOWED,
+    OVERSHOOT_WEIGHT,
+    SATURATION_WEIGHT,
+)
+from quadnav.tune.run import OWN, TUNED, Outcome, TuneRun
+
+#: Every file a tuning run writes.
+TUNE_FILES = ("gains.toml", "tune.json", "trials.csv", "report.html")
+CM_PER_M = 100.0
+
+
+def write_outputs(tuning: TuneRun, outcome: Outcome, folder: Path) -> list[str]:
+    """Write :data:`TUNE_FILES` of ``outcome`` into ``folder``, whole or not at all."""
+    record = tuning.record(outcome)
+    comment = (f"Gains tuned by quadnav tune for the {record['vehicle']} vehicle: trial "
+               f"{outcome.best_trial} of {record['trials']} ({record['space']} space, "
+               f"{tuning.settings.study.sampler}, seed {tuning.settings.study.seed}), "
+               f"training set {record['training']}.")
+    knobs = record["knobs"]
+    trials = [[trial.number, trial.value, *(trial.params[k] for k in knobs)]
+              for trial in outcome.trials]
+    texts = {"gains.toml": toml_text(outcome.tuned, comment),
+             "tune.json": json.dumps(record, indent=2) + "\n",
+             "trials.csv": csv_table(np.array(trials, dtype=float).reshape(-1, 2 + len(knobs)),
+                                     ",".join(["trial", "objective", *knobs])),
+             "report.html": _page(tuning, outcome, record)}
+    with replaced_folder(folder, TUNE_FILES) as staging:
+        for name, text in texts.items():
+            (staging / name).write_text(text, encoding="utf-8")
+    return list(texts)
+
+
+def comparison_rows(outcome: Outcome, set_name: str) -> list[list[str]]:
+    """One row per gain set of ``set_name``'s scores: name, successes, median and largest
+    RMS error (cm), mean step overshoot (%), objective — for the page and the terminal."""
+    rows = []
+    for name, s in outcome.scores[set_name].items():
+        overshoot = s["mean_overshoot_percent"]
+        rows.append([name, f"{s['successes']}/{s['flights']}",
+                     f"{CM_PER_M * s['median_rms_tracking_error_m']:.2f}",
+                     f"{CM_PER_M * s['max_rms_tracking_error_m']:.2f}",
+                     "-" if overshoot is None else f"{overshoot:.2f}",
+                     f"{s['objective']:.3f}"])
+    return rows
+
+
+COMPARISON_HEADER = ("gains", "successes", "median RMS error (cm)", "max RMS error (cm)",
+                     "mean step overshoot (%)", "objective")
+
+
+def _history_figure(outcome: Outcome) -> Figure:
+    """Each trial's objective and the best so far, against the trial number."""
+    numbers = np.array([trial.number for trial in outcome.trials])
+    values = np.array([trial.value for trial in outcome.trials])
+    fig, ax = plt.subplots(figsize=(9, 3.6), dpi=120, layout="constrained")
+    ax.plot(numbers, values, "o", color="tab:blue", markersize=3.5, alpha=0.7, label="trial")
+    ax.step(numbers, np.minimum.accumulate(values), where="post", color="tab:red",
+            label="best so far")
+    ax.axhline(values[numbers == 0][0] if (numbers == 0).any() else values[0], color="0.4",
+               linestyle="--", linewidth=0.8, label="starting gains (trial 0)")
+    ax.set_ylim(top=min(values.max(), np.median(values) + 3 * (np.median(values)
+                                                                - values.min() + 0.1)))
+    ax.set_xlabel("trial")
+    ax.set_ylabel("objective (training set)")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
+    return fig
+
+
+def _errors_figure(outcome: Outcome, items: list[str]) -> Figure:
+    """The RMS tracking error of every held-out flight, per gain set (log scale), failed
+    flights crossed."""
+    flights = outcome.flights["held-out"]
+    names = list(flights)
+    fig, ax = plt.subplots(figsize=(11, 0.32 * len(items) + 1.6), dpi=120,
+                           layout="constrained")
+    rows = np.arange(len(items))
+    for name in names:
+        errors = np.array([CM_PER_M * m["rms_tracking_error_m"] for m in flights[name]])
+        failed = np.array([not m["success"] for m in flights[name]])
+        style = ({"marker": "D", "color": "black", "markersize": 6} if name == TUNED else
+                 {"marker": "o", "markersize": 4, "alpha": 0.75})
+        line, = ax.plot(errors, rows, linestyle="", label=name, zorder=3 + (name == TUNED),
+                        **style)
+        ax.plot(errors[failed], rows[failed], "x", color=line.get_color(), markersize=9,
+                zorder=5)
+    ax.set_yticks(rows, items, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xscale("log")
+    ax.set_xlabel("RMS tracking error (cm); x: the flight failed")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    return fig
+
+
+def _page(tuning: TuneRun, outcome: Outcome, record: dict[str, Any]) -> str:
+    study = tuning.settings.study
+    tuned = outcome.tuned
+    values = [[f"<code>{html.escape(name)}</code>", f"{tuning_start:.4g}", f"{value:.4g}"]
+              for name, value in outcome.best_params.items()
+              for tuning_start in [_start_value(tuning, name)]]
+    body = (
+        f"<h1>Gains tuned for the {html.escape(record['vehicle'])} vehicle</h1>"
+        f"<p>{len(outcome.trials)} trials of an Optuna study ({html.escape(study.sampler)}, "
+        f"seed {study.seed}, {study.parallel} at a time) over the "
+        f"<code>{html.escape(tuning.settings.space)}</code> space "
+        f"({len(record['knobs'])} knobs), on the training set "
+        f"<code>{html.escape(record['training'])}</code>; best: trial {outcome.best_trial}, "
+        f"objective {outcome.best_value:.3f}. Wall time {outcome.wall_time:.0f} s. The "
+        "objective is the mean over the flights of ln(RMS error / 1 cm), plus "
+        f"{OVERSHOOT_WEIGHT:g} per percent of step overshoot beyond {OVERSHOOT_ALLOWED:g} %, "
+        f"{SATURATION_WEIGHT:g} times the share of saturated control steps and "
+        f"{FAILURE_PENALTY:g} for a failed flight.</p>"
+        f"<h2>Held-out set: <code>{html.escape(record['held_out'])}</code></h2>"
+        + html_table(COMPARISON_HEADER, comparison_rows(outcome, "held-out"), 1)
+        + figure_html(png_bytes(_errors_figure(outcome, outcome.items["held-out"])),
+                      "RMS tracking error of each held-out flight with each gain set.")
+        + f"<h2>Training set: <code>{html.escape(record['training'])}</code></h2>"
+        + html_table(COMPARISON_HEADER, comparison_rows(outcome, "training"), 1)
+        + figure_html(png_bytes(_history_figure(outcome)),
+                      "The objective of each trial on the training set, and the best so far.")
+        + "<h2>Tuned values</h2>"
+        + html_table(("knob", f"starting ({OWN})", TUNED), values, 1)
+        + f"<p>The whole gain set is in <code>gains.toml</code>: fly it with "
+        f"<code>--gains gains.toml</code>. Tuned attitude gains: "
+        f"{html.escape(str(tuned.attitude_kp.tolist()))}.</p>")
+    return html_page(f"quadnav tune: {record['vehicle']}", body)
+
+
+def _start_value(tuning: TuneRun, name: str) -> float:
+    knob = next(knob for knob in tuning.knobs if knob.name == name)
+    return knob.read(tuning.start)
