@@ -97,7 +97,7 @@ def test_a_bad_spec_is_one_line_naming_the_line_and_nothing_is_written(tmp_path,
     (["forest", "--speeds", "fast"], "argument --speeds: expected from 0.01 to 100 m/s or max"),
     (["forest", "--workers", "0"], "argument --workers: expected a whole number from 1"),
     (["spec.toml", "--seeds", "3"], "--seeds: set it in the spec | spec.toml instead"),
-    (["forest", "--start", "1", "1", "1", "--gains", "missing.toml"], "gains: expected 'default' or a gains TOML file, got 'missing.toml'"),
+    (["forest", "--start", "1", "1", "1", "--gains", "missing.toml"], "gains: expected 'default', a course gain table (p2a-22by7-raikar, "),
     (["forest", "--start", "1e5", "1", "1"], "argument --start: expected from -10,000 to 10,000 m"),
     (["forest", "--ray", "localhost:1", "--seeds", "1", "--params", "nope"], "vehicle: expected a vehicle preset"),
 ])
