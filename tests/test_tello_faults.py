@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
 import re
 import signal
 import subprocess
@@ -105,11 +104,11 @@ def test_the_first_stop_signal_raises_and_later_ones_wait(first, raised):
     before = [signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)]
     with StopSignals() as signals:
         with pytest.raises(raised) as caught:
-            os.kill(os.getpid(), first)
+            signal.raise_signal(first)
             time.sleep(5)  # the handler raises long before
         assert getattr(caught.value, "signum", signal.SIGINT) == first
         for signum in (signal.SIGHUP, signal.SIGINT, signal.SIGTERM):
-            os.kill(os.getpid(), signum)
+            signal.raise_signal(signum)
         time.sleep(0.01)
         assert signals.take() == [signal.SIGHUP, signal.SIGINT, signal.SIGTERM]
         assert signals.held == []
