@@ -9,7 +9,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run_here
 from matplotlib.colors import to_rgb
 from PIL import Image
 
@@ -60,7 +60,7 @@ def near(frame: Image.Image, color: str, tolerance: float = 40.0) -> np.ndarray:
 
 def test_a_gif_of_the_flight(flown, tmp_path):
     gif = tmp_path / "flight.gif"
-    result = run("animate", flown, "-o", gif, "--max-frames", "40", "--quiet")
+    result = run_here("animate", flown, "-o", gif, "--max-frames", "40", "--quiet")
     assert result.returncode == 0, result.stderr
     assert "40 frames of 800 x 600 pixels at 20 fps" in result.stdout
     assert "faster than --speed 1" in result.stdout  # a 16 s flight in 40 frames
@@ -132,7 +132,7 @@ def test_bad_flags_are_one_line_exit_2(flown, tmp_path, args, fragments):
 
 
 def test_bad_folders_are_one_line_exit_2(pathless, tmp_path):
-    assert_user_error(run("animate", tmp_path / "nowhere", "-o", tmp_path / "a.gif"),
+    assert_user_error(run_here("animate", tmp_path / "nowhere", "-o", tmp_path / "a.gif"),
                       "nowhere", "not a quadnav fly or track output folder")
     assert_user_error(quadnav("animate", pathless, "-o", tmp_path / "a.gif"),
                       str(pathless), "no path", "no flight to animate")

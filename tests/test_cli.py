@@ -31,7 +31,7 @@ def test_version_and_help():
 
 
 def test_map_info_on_a_real_map(shared_maps):
-    result = run("map", "info", shared_maps / "meam620/test_window.json")
+    result = run_here("map", "info", shared_maps / "meam620/test_window.json")
     assert result.returncode == 0, result.stderr
     out = result.stdout
     assert "bounds:      x 0 .. 10, y -5 .. 20, z 0 .. 6 m" in out
@@ -42,7 +42,7 @@ def test_map_info_on_a_real_map(shared_maps):
 
 
 def test_map_info_on_a_built_in_world():
-    result = run("map", "info", "forest:size=30x20x5,seed=2")
+    result = run_here("map", "info", "forest:size=30x20x5,seed=2")
     assert result.returncode == 0, result.stderr
     assert "size:        30 x 20 x 5 m" in result.stdout
     assert "start:" in result.stdout and "goal:" in result.stdout
@@ -50,36 +50,36 @@ def test_map_info_on_a_built_in_world():
 
 def test_map_check_reports_margin_block_and_outside(shared_maps):
     window = shared_maps / "meam620/test_window.json"
-    result = run("map", "check", window)
+    result = run_here("map", "check", window)
     assert result.returncode == 0, result.stderr
     assert "start (0.1, -4.9, 0.2): inside the 0.3 m safety margin (near the boundary)" in result.stdout
     assert "goal (8, 18, 3): free" in result.stdout
 
-    result = run("map", "check", window, "--start", "1", "2.2", "1", "--goal", "5", "5", "9")
+    result = run_here("map", "check", window, "--start", "1", "2.2", "1", "--goal", "5", "5", "9")
     assert_user_error(result, "test_window.json", "start (1, 2.2, 1) is in a block",
                       "goal (5, 5, 9) is outside the boundary")
     assert "start (1, 2.2, 1): inside block 0 [0, 10] x [2, 2.5] x [0, 1.5]" in result.stdout
 
-    result = run("map", "check", shared_maps / "rbe595/map1.txt", "--margin", "0.2",
+    result = run_here("map", "check", shared_maps / "rbe595/map1.txt", "--margin", "0.2",
                  "--start", "0", "-4.5", "0.5", "--goal", "8", "18", "3")
     assert result.returncode == 0
     assert "(on the boundary)" in result.stdout
 
 
 def test_map_check_with_a_start_goal_file(shared_maps):
-    result = run("map", "check", shared_maps / "rbe595/p2b_map1.txt",
+    result = run_here("map", "check", shared_maps / "rbe595/p2b_map1.txt",
                  "--start-goal", shared_maps / "rbe595/p2b_startandgoal_map1.txt")
     assert result.returncode == 0, result.stderr
     assert "start (0, 0, 0): inside the 0.2 m safety margin (on the boundary)" in result.stdout
 
 
 def test_map_check_without_points_is_a_user_error(shared_maps):
-    assert_user_error(run("map", "check", shared_maps / "rbe595/map1.txt"), "has no start or goal")
+    assert_user_error(run_here("map", "check", shared_maps / "rbe595/map1.txt"), "has no start or goal")
 
 
 def test_map_show_writes_a_picture(tmp_path, shared_maps):
     out = tmp_path / "map.png"
-    result = run("map", "show", shared_maps / "rbe595/map1.txt", "--start", "0.5", "-4.5", "0.5",
+    result = run_here("map", "show", shared_maps / "rbe595/map1.txt", "--start", "0.5", "-4.5", "0.5",
                  "--goal", "8", "18", "3", "-o", out)
     assert result.returncode == 0, result.stderr
     from matplotlib.image import imread
@@ -92,15 +92,15 @@ def test_map_show_writes_a_picture(tmp_path, shared_maps):
 
 
 def test_map_show_defaults_to_the_built_in_world(tmp_path):
-    result = run("map", "show", cwd=tmp_path)
+    result = run_here("map", "show", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "map.png").stat().st_size > 10_000
 
 
 def test_map_convert_text_json_text(tmp_path, shared_maps):
     source = shared_maps / "meam620/map_2017_boundary9fields.txt"
-    assert run("map", "convert", source, tmp_path / "m.json").returncode == 0
-    assert run("map", "convert", tmp_path / "m.json", tmp_path / "m.txt").returncode == 0
+    assert run_here("map", "convert", source, tmp_path / "m.json").returncode == 0
+    assert run_here("map", "convert", tmp_path / "m.json", tmp_path / "m.txt").returncode == 0
     original, again = read_map(source), read_map(tmp_path / "m.txt")
     np.testing.assert_array_equal(original.blocks, again.blocks)
     np.testing.assert_array_equal(original.boundary, again.boundary)
@@ -109,13 +109,13 @@ def test_map_convert_text_json_text(tmp_path, shared_maps):
 
 
 def test_map_convert_a_built_in_world(tmp_path):
-    result = run("map", "convert", "window:seed=4", tmp_path / "w.json")
+    result = run_here("map", "convert", "window:seed=4", tmp_path / "w.json")
     assert result.returncode == 0, result.stderr
     assert read_map(tmp_path / "w.json").start is not None
 
 
 def test_worlds_lists_every_built_in_world_and_its_parameters():
-    result = run("worlds")
+    result = run_here("worlds")
     assert result.returncode == 0
     for name in ("forest", "window", "maze", "empty"):
         assert f"\n{name}" in "\n" + result.stdout
@@ -128,7 +128,7 @@ def test_worlds_lists_every_built_in_world_and_its_parameters():
 def test_clip_warning_is_one_line(tmp_path):
     path = tmp_path / "m.txt"
     path.write_text("boundary 0 0 0 5 5 5\nblock 4 4 4 6 6 6\n")
-    result = run("map", "info", path)
+    result = run_here("map", "info", path)
     assert result.returncode == 0
     assert result.stderr.strip() == f"quadnav: warning: {path}:2: block extends past the boundary; clipped to it"
 
@@ -159,7 +159,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, fragments):
 def test_malformed_map_file_names_file_and_line(tmp_path):
     path = tmp_path / "m.txt"
     path.write_text("boundary 0 0 0 5 5 5\n\nblock 1 1 1 2 2\n")
-    assert_user_error(run("map", "info", path), f"{path}:3: block: expected 6 numbers")
+    assert_user_error(run_here("map", "info", path), f"{path}:3: block: expected 6 numbers")
 
 
 @pytest.mark.parametrize(("signum", "code", "words"), [

@@ -47,10 +47,10 @@ def test_fly_on_the_default_world_writes_every_output(tmp_path):
 
 def test_the_same_seed_flies_the_same_flight(tmp_path):
     for name in ("a", "b"):
-        assert run("fly", SMALL, "--seed", "5", "-o", tmp_path / name, "--quiet",
+        assert run_here("fly", SMALL, "--seed", "5", "-o", tmp_path / name, "--quiet",
                    "--no-figures").returncode == 0
     assert (tmp_path / "a/flight.csv").read_text() == (tmp_path / "b/flight.csv").read_text()
-    assert run("fly", SMALL, "--seed", "6", "-o", tmp_path / "c", "--quiet",
+    assert run_here("fly", SMALL, "--seed", "6", "-o", tmp_path / "c", "--quiet",
                "--no-figures").returncode == 0
     assert not (tmp_path / "c/flight_3d.png").exists()
     assert (tmp_path / "a/path.csv").read_text() != (tmp_path / "c/path.csv").read_text()
@@ -60,7 +60,7 @@ def test_the_rbe595_vehicle_and_a_gains_file(tmp_path):
     gains = tmp_path / "gains.toml"
     gains.write_text("[position]\nkp = [0.6, 0.6, 2.0]\n")
     # Soft position gains lag: a gentle acceleration limit lets them settle on the goal.
-    result = run("fly", SMALL, "--params", "rbe595", "--gains", gains, "--speed", "1",
+    result = run_here("fly", SMALL, "--params", "rbe595", "--gains", gains, "--speed", "1",
                  "--accel", "1",
                  "-o", tmp_path / "out", "--quiet", "--no-figures")
     assert result.returncode == 0, result.stdout + result.stderr
@@ -69,7 +69,7 @@ def test_the_rbe595_vehicle_and_a_gains_file(tmp_path):
 
 def test_a_missed_goal_exits_1_and_still_reports(tmp_path):
     # A wind of 1.5 N on an 80 g drone needs more tilt than the controller allows.
-    result = run("fly", SMALL, "--wind", "1.5", "0", "0", "--settle", "0", "-o",
+    result = run_here("fly", SMALL, "--wind", "1.5", "0", "0", "--settle", "0", "-o",
                  tmp_path / "out", "--quiet", "--no-figures")
     assert result.returncode == 1, result.stdout + result.stderr
     assert "quadnav: flight failed:" in result.stderr
@@ -83,7 +83,7 @@ def test_no_path_exits_1_with_metrics_only(tmp_path):
     out.mkdir()
     (out / "flight.csv").write_text("stale")
     (out / "view.html").write_text("stale")
-    result = run("fly", SMALL, "--iterations", "1", "-o", out, "--quiet")
+    result = run_here("fly", SMALL, "--iterations", "1", "-o", out, "--quiet")
     assert result.returncode == 1
     assert "no path" in result.stderr
     metrics = json.loads((out / "metrics.json").read_text())
@@ -114,20 +114,20 @@ def test_a_bad_gains_file_is_named(tmp_path):
     gains = tmp_path / "gains.toml"
     gains.write_text("[rate]\nkp = [1, 2]\n")
     out = tmp_path / "out"
-    assert_user_error(run("fly", SMALL, "--gains", gains, "-o", out), str(gains), "kp")
+    assert_user_error(run_here("fly", SMALL, "--gains", gains, "-o", out), str(gains), "kp")
     assert not out.exists()
 
 
 def test_an_unreachable_goal_is_a_user_error(tmp_path, shared_maps):
     out = tmp_path / "out"
-    result = run("fly", shared_maps / "meam620/test_impossible.json", "-o", out)
+    result = run_here("fly", shared_maps / "meam620/test_impossible.json", "-o", out)
     assert_user_error(result, "disconnected")
     assert not out.exists()
 
 
 def test_a_start_inside_a_block_is_a_user_error(tmp_path, shared_maps):
     out = tmp_path / "out"
-    result = run("fly", shared_maps / "rbe595/map1.txt", "--start", "5", "2.25", "1",
+    result = run_here("fly", shared_maps / "rbe595/map1.txt", "--start", "5", "2.25", "1",
                  "--goal", "8", "18", "3", "-o", out)
     assert_user_error(result, "start (5, 2.25, 1)", "inside block")
     assert not out.exists()
@@ -137,7 +137,7 @@ def test_a_run_folder_reads_back(tmp_path):
     from quadnav.report.rundir import read_run
 
     out = tmp_path / "out"
-    assert run("fly", SMALL, "-o", out, "--quiet", "--no-figures").returncode == 0
+    assert run_here("fly", SMALL, "-o", out, "--quiet", "--no-figures").returncode == 0
     record = read_run(out)
     metrics = json.loads((out / "metrics.json").read_text())
     assert record.metrics == metrics
@@ -165,7 +165,7 @@ def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(tmp_path):
     results = {}
     for name, extra in (("calm", []), ("windy", ["--wind", "0.03", "0", "0", "--gusts", "0.01"])):
         out = tmp_path / name
-        assert run("fly", SMALL, *extra, "-o", out, "--quiet", "--no-figures").returncode == 0
+        assert run_here("fly", SMALL, *extra, "-o", out, "--quiet", "--no-figures").returncode == 0
         results[name] = json.loads((out / "metrics.json").read_text())
     assert results["windy"]["success"]
     # A 0.03 N wind and 0.01 N gusts add a centimetre or so of tracking error.

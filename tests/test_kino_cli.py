@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run, run_here
+from clitools import assert_user_error, run_here
 
 from quadnav.kinodynamic.diffdrive import DiffDrive, propagate
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -28,15 +28,15 @@ def assert_pngs(folder, *names):
 
 
 def test_help_names_both_vehicles_and_the_default_height():
-    result = run("kino", "--help")
+    result = run_here("kino", "--help")
     assert result.returncode == 0 and "diffdrive" in result.stdout and "quadrotor" in result.stdout
-    result = run("kino", "diffdrive", "--help")
+    result = run_here("kino", "diffdrive", "--help")
     assert result.returncode == 0 and "half way up its z range" in " ".join(result.stdout.split())
 
 
 def test_diffdrive_writes_plan_tracks_stats_and_figures(tmp_path):
     out = tmp_path / "out"
-    result = run(*DIFFDRIVE, "--compare", "--quiet", "-o", out)
+    result = run_here(*DIFFDRIVE, "--compare", "--quiet", "-o", out)
     assert result.returncode == 0, result.stderr
     model = DiffDrive()
 
@@ -77,13 +77,13 @@ def test_diffdrive_on_a_2d_map_file_and_no_plan_in_one_iteration(tmp_path):
     map2d.write_text("# a wall with a gap at the top\nboundary 0 0 10 6\nrect 4 0 5 4\n")
     args = ("kino", "diffdrive", map2d, "--start", "1", "1", "0", "--goal", "8", "1",
             "--quiet", "-o", tmp_path)
-    assert run(*args).returncode == 0
+    assert run_here(*args).returncode == 0
     summary = json.loads((tmp_path / "kino.json").read_text())
     assert summary["solved"] and summary["height"] is None and summary["map"] == str(map2d)
     states = read_csv(tmp_path / "states.csv")[1]
     assert states[:, 2].max() > 4  # around the wall, not through it
 
-    result = run(*args, "--iterations", "1")
+    result = run_here(*args, "--iterations", "1")
     assert result.returncode == 1
     assert "goal region not reached" in result.stderr
     assert json.loads((tmp_path / "kino.json").read_text())["solved"] is False
@@ -93,7 +93,7 @@ def test_diffdrive_on_a_2d_map_file_and_no_plan_in_one_iteration(tmp_path):
 
 
 def test_quadrotor_writes_states_controls_replay_and_figures(tmp_path):
-    result = run("kino", "quadrotor", "forest", "--seed", "1", "--quiet", "-o", tmp_path)
+    result = run_here("kino", "quadrotor", "forest", "--seed", "1", "--quiet", "-o", tmp_path)
     assert result.returncode == 0, result.stderr
     world, model = load_world("forest"), SampledQuadrotor()
     header, states = read_csv(tmp_path / "states.csv")
@@ -114,7 +114,7 @@ def test_quadrotor_writes_states_controls_replay_and_figures(tmp_path):
 
 
 def test_quadrotor_in_one_iteration_exits_1(tmp_path):
-    result = run("kino", "quadrotor", "forest", "--iterations", "1", "--quiet", "-o", tmp_path)
+    result = run_here("kino", "quadrotor", "forest", "--iterations", "1", "--quiet", "-o", tmp_path)
     assert result.returncode == 1
     assert "goal region not reached" in result.stderr
     assert not (tmp_path / "states.csv").exists() and not (tmp_path / "controls.csv").exists()
@@ -158,5 +158,5 @@ def test_quadrotor_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
          "--iterations: expected a whole number from 1 to 1,000,000"),
     ])
     (tmp_path / "file").write_text("")
-    assert_user_error(run("kino", *DIFFDRIVE_FOREST, "-o", tmp_path / "file"),
+    assert_user_error(run_here("kino", *DIFFDRIVE_FOREST, "-o", tmp_path / "file"),
                       "expected a folder")

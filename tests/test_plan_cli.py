@@ -6,7 +6,7 @@ import csv
 import json
 
 import numpy as np
-from clitools import assert_user_error, run, run_here
+from clitools import assert_user_error, run_here
 
 from quadnav.world import load_world
 
@@ -20,7 +20,7 @@ def read_path(folder) -> np.ndarray:
 
 def test_plan_writes_path_stats_and_figure(tmp_path):
     out = tmp_path / "out"
-    result = run("plan", "forest", "--iterations", "20000", "--time", "60", "--seed", "4", "--quiet", "-o", out)
+    result = run_here("plan", "forest", "--iterations", "20000", "--time", "60", "--seed", "4", "--quiet", "-o", out)
     assert result.returncode == 0, result.stderr
     world = load_world("forest")
     path = read_path(out)
@@ -38,14 +38,14 @@ def test_plan_writes_path_stats_and_figure(tmp_path):
 
 def test_same_seed_same_path_file(tmp_path):
     args = ("plan", "window", "--iterations", "3000", "--time", "60", "--no-refine", "--quiet")
-    assert run(*args, "-o", tmp_path / "a").returncode == 0
-    assert run(*args, "-o", tmp_path / "b").returncode == 0
+    assert run_here(*args, "-o", tmp_path / "a").returncode == 0
+    assert run_here(*args, "-o", tmp_path / "b").returncode == 0
     assert (tmp_path / "a" / "path.csv").read_text() == (tmp_path / "b" / "path.csv").read_text()
 
 
 def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):
-    assert run("plan", "maze", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path).returncode == 0
-    result = run("plan", "maze", "--iterations", "3", "--quiet", "-o", tmp_path)
+    assert run_here("plan", "maze", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path).returncode == 0
+    result = run_here("plan", "maze", "--iterations", "3", "--quiet", "-o", tmp_path)
     assert result.returncode == 1
     assert "the search stopped at its cap of 3 samples" in result.stderr
     assert "raise --iterations" in result.stderr
@@ -54,7 +54,7 @@ def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):
 
 
 def test_start_in_the_margin_warns_and_plans(tmp_path, shared_maps):
-    result = run("plan", shared_maps / "rbe595" / "map1.txt", "--start", "0", "-5", "0",
+    result = run_here("plan", shared_maps / "rbe595" / "map1.txt", "--start", "0", "-5", "0",
                  "--goal", "8", "18", "3", "--iterations", "20000", "--time", "60", "--quiet", "-o", tmp_path)
     assert result.returncode == 0, result.stderr
     assert "warning: start (0, -5, 0) is inside the 0.2 m safety margin; only the straight" in result.stderr
@@ -79,4 +79,4 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, shared_maps):
         assert_user_error(run_here("plan", *args, "--quiet", "-o", out), fragment)
     assert not out.exists()
     (tmp_path / "file").write_text("")
-    assert_user_error(run("plan", "forest", "-o", tmp_path / "file"), "expected a folder")
+    assert_user_error(run_here("plan", "forest", "-o", tmp_path / "file"), "expected a folder")

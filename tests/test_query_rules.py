@@ -15,7 +15,7 @@ import re
 import warnings
 
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run_here
 
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.hardware.flight_plan import plan_flight
@@ -81,7 +81,7 @@ def test_every_entry_point_accepts_and_refuses_the_same_starts(query):
 
 def test_a_start_equal_to_the_goal_is_one_line_exit_2(tmp_path):
     for command in (("plan",), ("fly",), ("kino", "quadrotor", "forest")):
-        result = run(*command, "--start", "1", "1", "1", "--goal", "1", "1", "1", "-o",
+        result = run_here(*command, "--start", "1", "1", "1", "--goal", "1", "1", "1", "-o",
                      tmp_path / "out", "--quiet")
         assert_user_error(result, "start and goal are the same point (1, 1, 1)")
         assert not (tmp_path / "out").exists()
@@ -98,22 +98,22 @@ def test_the_default_flight_budget_solves_a_big_maze():
 
 
 def test_a_search_ended_by_its_time_budget_says_so(tmp_path):
-    result = run("plan", "maze:cells=12x12,levels=3", "--time", "0.001", "--quiet",
+    result = run_here("plan", "maze:cells=12x12,levels=3", "--time", "0.001", "--quiet",
                  "-o", tmp_path)
     assert result.returncode == 1
     assert "the time budget ran out; raise --time" in result.stderr
 
 
 def test_map_check_proves_connection_or_its_absence(tmp_path, shared_maps):
-    impossible = run("map", "check", shared_maps / "meam620" / "test_impossible.json")
+    impossible = run_here("map", "check", shared_maps / "meam620" / "test_impossible.json")
     assert_user_error(impossible, "are disconnected with a 0.1 m margin: no path exists")
-    window = run("map", "check", shared_maps / "meam620" / "test_window.json")
+    window = run_here("map", "check", shared_maps / "meam620" / "test_window.json")
     assert window.returncode == 0, window.stderr
     assert "connected: yes, a path of" in window.stdout
 
 
 def test_a_trajectory_the_vehicle_cannot_fly_is_refused_with_what_would_work(tmp_path):
-    result = run("fly", "--speed", "10", "--accel", "20", "-o", tmp_path / "out", "--quiet")
+    result = run_here("fly", "--speed", "10", "--accel", "20", "-o", tmp_path / "out", "--quiet")
     assert_user_error(result, "the tello vehicle cannot fly this trajectory",
                       "exceeds the limit", "the same path flies within every limit at --speed")
     assert not (tmp_path / "out").exists()
@@ -142,7 +142,7 @@ def test_a_margin_that_cannot_hold_the_body_is_warned_about():
 
 
 def test_speed_max_flies_the_fastest_trajectory_the_vehicle_can_follow(tmp_path):
-    fastest = run("fly", "--speed", "max", "-o", tmp_path / "max", "--quiet", "--no-figures")
+    fastest = run_here("fly", "--speed", "max", "-o", tmp_path / "max", "--quiet", "--no-figures")
     assert fastest.returncode == 0, fastest.stderr
     metrics = json.loads((tmp_path / "max" / "metrics.json").read_text())
     default = fly_mission(load_world("forest"))  # what plain `quadnav fly` flies, 2 m/s
@@ -161,13 +161,13 @@ def test_speed_max_flies_the_fastest_trajectory_the_vehicle_can_follow(tmp_path)
 def test_a_climb_beyond_the_thrust_is_refused_with_the_acceleration_that_flies(tmp_path):
     # Climbing at 20 m/s^2 asks the 80 g Tello for twice its weight in thrust.
     climb = ("empty:size=10x10x10", "--start", "5", "5", "1", "--goal", "5", "5", "9")
-    result = run("fly", *climb, "--speed", "3", "--accel", "20", "-o", tmp_path / "out",
+    result = run_here("fly", *climb, "--speed", "3", "--accel", "20", "-o", tmp_path / "out",
                  "--quiet", "--no-figures")
     assert_user_error(result, "cannot fly this trajectory: thrust-to-weight ratio",
                       "exceeds the limit", "flies within every limit at --speed 3 --accel")
     accel = float(result.stderr.split("--accel ")[1].split()[0])
     assert 3.0 < accel < 20.0  # the speed is kept; only the acceleration is lowered
-    advised = run("fly", *climb, "--speed", "3", "--accel", str(accel), "-o",
+    advised = run_here("fly", *climb, "--speed", "3", "--accel", str(accel), "-o",
                   tmp_path / "advised", "--quiet", "--no-figures")
     assert advised.returncode == 0, advised.stderr
     assert json.loads((tmp_path / "advised" / "metrics.json").read_text())["success"]

@@ -10,7 +10,7 @@ import re
 import shutil
 
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run_here
 from PIL import Image
 
 from quadnav.cli.main import main
@@ -31,7 +31,7 @@ SIZES = [(1440, 840), (1560, 960), (1200, 480), (1320, 1080)]
 def flown(tmp_path_factory):
     """A run by ``quadnav fly`` with its figures and report."""
     folder = tmp_path_factory.mktemp("flown") / "out"
-    result = run("fly", SMALL, "-o", folder, "--quiet")
+    result = run_here("fly", SMALL, "-o", folder, "--quiet")
     assert result.returncode == 0, result.stderr
     assert str(folder / REPORT) in result.stdout
     return folder
@@ -148,7 +148,7 @@ def test_one_folder_reports_into_it_by_default(flown, tmp_path, capsys, monkeypa
 
 def test_a_bad_folder_is_one_line_exit_2_and_writes_nothing(flown, tmp_path):
     out = tmp_path / "all.html"
-    assert_user_error(run("report", flown, tmp_path / "nowhere", "-o", out),
+    assert_user_error(run_here("report", flown, tmp_path / "nowhere", "-o", out),
                       "nowhere", "not a quadnav fly or track output folder")
     assert not out.exists()
 

@@ -80,7 +80,7 @@ def test_a_helix_is_tracked_within_centimetres(tmp_path):
 def test_an_mp_csv_written_by_traj_is_flown_as_written(tmp_path):
     path = tmp_path / "path.csv"
     path.write_text("x,y,z\n1,1,1\n4,2,1.5\n7,6,2\n")
-    written = run("traj", "empty", "--path", path, "--dt", "0.01", "-o", tmp_path / "traj")
+    written = run_here("traj", "empty", "--path", path, "--dt", "0.01", "-o", tmp_path / "traj")
     assert written.returncode == 0, written.stderr
     out = tmp_path / "track"
     # traj writes MP.csv at the course's 0.05 s and track reads it at that rate by default.

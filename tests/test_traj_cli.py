@@ -6,13 +6,13 @@ import json
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run, run_here
+from clitools import assert_user_error, run_here
 
 
 def test_plan_then_traj_writes_every_file(tmp_path):
-    assert run("plan", "forest", "--iterations", "20000", "--time", "60", "--quiet", "-o",
+    assert run_here("plan", "forest", "--iterations", "20000", "--time", "60", "--quiet", "-o",
                tmp_path / "plan").returncode == 0
-    result = run("traj", "forest", "--path", tmp_path / "plan" / "path.csv", "-o",
+    result = run_here("traj", "forest", "--path", tmp_path / "plan" / "path.csv", "-o",
                  tmp_path / "traj", "--dt", "0.05")
     assert result.returncode == 0, result.stderr
     out = tmp_path / "traj"
@@ -48,8 +48,8 @@ def test_traj_bad_input_is_one_line_exit_2(tmp_path):
         assert_user_error(run_here("traj", *args, "-o", out), fragment)
     good = tmp_path / "good.csv"
     good.write_text("x,y,z\n1,1,1\n19,19,3\n")  # straight through the trees
-    assert_user_error(run("traj", "forest", "--path", good, "-o", out), "path segment 0 from (1, 1, 1) to (19, 19, 3) touches a block")
+    assert_user_error(run_here("traj", "forest", "--path", good, "-o", out), "path segment 0 from (1, 1, 1) to (19, 19, 3) touches a block")
     good.write_text("x,y,z\n1,1,1\n1,2,1\n")
-    assert_user_error(run("traj", "forest", "--path", good, "--method", "cubic", "--corridor",
+    assert_user_error(run_here("traj", "forest", "--path", good, "--method", "cubic", "--corridor",
                           "-o", out), "need method minsnap")
     assert not out.exists()

@@ -15,7 +15,7 @@ import shutil
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run_here
 from PIL import Image
 
 from quadnav.cli.main import main
@@ -43,7 +43,7 @@ READOUT = re.compile(r"t = ([\d.]+) s\s+position \(([-\d.]+), ([-\d.]+), ([-\d.]
 def flown(tmp_path_factory):
     """A run folder of a successful flight, written with ``--html``, and the fly result."""
     folder = tmp_path_factory.mktemp("flown")
-    result = run("fly", SMALL, "-o", folder, "--quiet", "--no-figures", "--html")
+    result = run_here("fly", SMALL, "-o", folder, "--quiet", "--no-figures", "--html")
     assert result.returncode == 0, result.stderr
     return folder, result
 
@@ -88,7 +88,7 @@ def test_fly_html_writes_a_self_contained_page(flown):
 def test_view_writes_the_same_page_as_fly(flown, tmp_path):
     folder, _ = flown
     copy = shutil.copytree(folder, tmp_path / "copy", ignore=shutil.ignore_patterns("*.html"))
-    result = run("view", copy)
+    result = run_here("view", copy)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == f"wrote {copy / 'view.html'}"
     assert (copy / "view.html").read_bytes() == (folder / "view.html").read_bytes()
@@ -112,7 +112,7 @@ def test_text_from_the_run_cannot_break_out_of_the_page(unsolved):
 
 
 def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
-    assert_user_error(run("view", tmp_path), str(tmp_path), "not a quadnav fly or track output folder")
+    assert_user_error(run_here("view", tmp_path), str(tmp_path), "not a quadnav fly or track output folder")
     folder, _ = flown
     page = tmp_path / "no/such/dir/page.html"
     assert main(["view", str(folder), "-o", str(page)]) == 2
