@@ -35,7 +35,7 @@ def run_here(*args: str, cwd=None) -> subprocess.CompletedProcess:
     out, err = io.StringIO(), io.StringIO()
     parser = _parser()
     shown, here, build = warnings.showwarning, os.getcwd(), cli.build_parser
-    cli.build_parser = lambda: parser
+    cli.build_parser = lambda argv=None: parser
     try:
         if cwd is not None:
             os.chdir(cwd)

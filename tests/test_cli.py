@@ -14,6 +14,7 @@ import pytest
 from clitools import QUADNAV, assert_user_error, run, run_here
 
 from quadnav import __version__
+from quadnav.cli.commands import COMMANDS
 from quadnav.cli.launch import report_stop
 from quadnav.signals import Stopped
 from quadnav.world import read_map
@@ -28,6 +29,32 @@ def test_version_and_help():
                     ["map", "convert"], ["worlds"]):
         result = run_here(*command, "--help")
         assert result.returncode == 0 and "usage: quadnav" in result.stdout, command
+
+
+LOADED = """
+import sys
+from quadnav.cli.launch import main
+try:
+    main(sys.argv[1:])
+except SystemExit:
+    pass
+heavy = ("numba", "numpy", "scipy", "matplotlib", "quadnav.cli.fly_command",
+         "quadnav.cli.worlds_command")
+print("loaded:", *(name for name in heavy if name in sys.modules))
+"""
+
+
+@pytest.mark.parametrize(("args", "loaded"), [
+    (["--version"], ""), (["--help"], ""), (["nosuch"], ""),
+    (["worlds"], "numba numpy scipy quadnav.cli.worlds_command")])
+def test_a_command_line_loads_only_the_command_it_runs(args, loaded):
+    """--version, --help and a typo load no command and none of the numeric stack; a
+    command loads its own module and not the others'."""
+    result = subprocess.run([sys.executable, "-c", LOADED, *args], capture_output=True,
+                            text=True, timeout=60)
+    assert result.stdout.splitlines()[-1] == f"loaded: {loaded}".strip(), result
+    listing = run_here("--help").stdout
+    assert all(name in listing for name in COMMANDS)
 
 
 def test_map_info_on_a_real_map(shared_maps):

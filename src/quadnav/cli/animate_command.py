@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from quadnav.cli.args import number_in
+from quadnav.cli.commands import command_help
 from quadnav.cli.progress import fraction_bar
 from quadnav.limits import Range
 from quadnav.report.rundir import read_run
@@ -43,7 +44,7 @@ def animate(args: argparse.Namespace) -> int:
 def add_animate_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav animate`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "animate", help="animate a flight from a quadnav fly or track output folder (GIF or MP4)",
+        "animate", help=command_help("animate"),
         description="An animation of the flight in DIR (written by quadnav fly or track -o DIR): "
                     "the map in 3D with the path and the trajectory, the flown track "
                     "growing, the drone (enlarged, turned by its recorded attitude) and the "

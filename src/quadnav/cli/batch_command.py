@@ -22,6 +22,7 @@ from quadnav.cli.args import (
     speed_or_max,
     workers_description,
 )
+from quadnav.cli.commands import command_help
 from quadnav.cli.launch import interrupted_exit_code
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
@@ -133,7 +134,7 @@ def batch(args: argparse.Namespace) -> int:
 def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav batch`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "batch", help="fly many missions (maps x seeds x speeds ...) into a table and summary",
+        "batch", help=command_help("batch"),
         description="Monte-Carlo evaluation: fly every mission of a grid on local worker "
                     "processes (or a Ray cluster) without figures, and write DIR/results.parquet "
                     "and DIR/results.csv (one row per mission), DIR/summary.json (success rate "

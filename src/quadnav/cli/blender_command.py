@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.commands import command_help
 from quadnav.report.rundir import read_run
 from quadnav.viz.blender_scene import (
     CAMERAS,
@@ -62,7 +63,7 @@ def blender(args: argparse.Namespace) -> int:
 def add_blender_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav blender`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "blender", help="a run folder as a Blender scene (.blend), with optional renders",
+        "blender", help=command_help("blender"),
         description="Build a Blender scene of a quadnav fly or track output folder and save "
                     "it as a .blend: the blocks as cubes in their colours, the boundary as a black "
                     "box of alpha 0.344, the start (red) and goal (green) spheres, the "

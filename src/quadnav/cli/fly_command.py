@@ -23,6 +23,7 @@ from quadnav.cli.args import (
     speed_or_max,
     vehicle_and_gains,
 )
+from quadnav.cli.commands import command_help
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.limits import ACCELERATION, SPEED
 from quadnav.mission import (
@@ -132,7 +133,7 @@ def print_summary(mission: Mission) -> None:
 def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav fly`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "fly", help="plan, smooth and fly a simulated quadrotor through a map (the main job)",
+        "fly", help=command_help("fly"),
         description="The whole pipeline: plan a path with RRT* through MAP, shortcut and "
                     "smooth it, make a trajectory (minimum snap by default) that cruises at "
                     "the top speed, and fly "

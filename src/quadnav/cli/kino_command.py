@@ -47,6 +47,7 @@ from quadnav.cli.args import (
     resolve_margin,
     seed_value,
 )
+from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -376,7 +377,7 @@ def _add_search_arguments(parser: argparse.ArgumentParser) -> None:
 def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav kino diffdrive`` and ``quadnav kino quadrotor``."""
     kino = subparsers.add_parser(
-        "kino", help="kinodynamic RRT: a differential-drive robot or a quadrotor",
+        "kino", help=command_help("kino"),
         description="Grow a tree of sampled controls through a vehicle's motion model until "
                     "it reaches the goal region. Writes DIR/kino.json (statistics, settings, "
                     "model), DIR/states.csv, DIR/controls.csv, DIR/kino.png and "

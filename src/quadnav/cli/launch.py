@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import NoReturn
 
+from quadnav.cli.commands import command_in
 from quadnav.signals import STOP_SIGNALS, Stopped, interrupt_behind, interrupt_for, signal_of
 
 
@@ -112,7 +113,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     install_stop_handlers()
     sys.unraisablehook = stop_again
     try:
-        watch_kernel_loads()
+        if command_in(sys.argv[1:] if argv is None else argv) is not None:
+            watch_kernel_loads()  # a command runs: it loads compiled kernels (--help does not)
         from quadnav.cli.main import main as run_command_line
     except (KeyboardInterrupt, ImportError) as error:
         return report_stop(error)

@@ -12,6 +12,7 @@ from quadnav.cli.args import (
     resolve_margin,
     resolve_start_goal,
 )
+from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.limits import PLAN_TIME
 from quadnav.planning import PlannerSettings, make_problem
@@ -109,7 +110,7 @@ def convert(args: argparse.Namespace) -> int:
 
 def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav map ...`` on the top-level subparsers."""
-    parser = subparsers.add_parser("map", help="inspect, check, draw and convert maps",
+    parser = subparsers.add_parser("map", help=command_help("map"),
                                    description="Inspect, check, draw and convert maps.")
     commands = parser.add_subparsers(dest="map_command", metavar="COMMAND", required=True)
 

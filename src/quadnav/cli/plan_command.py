@@ -17,6 +17,7 @@ from quadnav.cli.args import (
     resolve_margin,
     resolve_start_goal,
 )
+from quadnav.cli.commands import command_help
 from quadnav.cli.progress import planning_bar
 from quadnav.limits import LENGTH
 from quadnav.planning import PlannerSettings, get_planner, make_problem
@@ -87,7 +88,7 @@ def _print_summary(name: str, result, raw_length: float) -> None:
 def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav plan`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "plan", help="plan a collision-free path (RRT* or OMPL)",
+        "plan", help=command_help("plan"),
         description="Plan a collision-free path through MAP with RRT* (or an OMPL planner), "
                     "shortcut and smooth it, and write DIR/path.csv (x,y,z per vertex), "
                     "DIR/plan.json (statistics) and DIR/plan.png (tree and path). Exit 1 "

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.commands import command_help
 from quadnav.cli.fly_command import write_mission
 from quadnav.errors import QuadnavError
 from quadnav.report.rundir import REPORT
@@ -44,7 +45,7 @@ def refly(args: argparse.Namespace) -> int:
 def add_refly_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav refly`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "refly", help="fly one mission of a batch again, with figures",
+        "refly", help=command_help("refly"),
         description="Rebuild one mission of a quadnav batch from its row and the batch's "
                     "settings (DIR/batch.json) and fly it alone, writing a run folder as "
                     f"quadnav fly does (metrics.json, figures, {REPORT}). Its metrics equal "

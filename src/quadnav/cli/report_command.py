@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.commands import command_help
 from quadnav.report.rundir import REPORT, read_run
 
 
@@ -23,7 +24,7 @@ def report(args: argparse.Namespace) -> int:
 def add_report_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav report`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "report", help="write an HTML report of one or more quadnav fly or track output folders",
+        "report", help=command_help("report"),
         description="One self-contained HTML file (images embedded, no external links) with "
                     "a section per run folder: the map and outcome, the explored tree with "
                     "the path in red, desired against actual position and velocity, the "

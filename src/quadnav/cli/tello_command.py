@@ -18,6 +18,7 @@ import time
 from collections.abc import Callable
 
 from quadnav.cli.args import coordinate, heading_degrees, time_scale
+from quadnav.cli.commands import command_help
 from quadnav.cli.tello_fly_command import add_tello_fly_command
 from quadnav.hardware.sdk import DEFAULT_HOST
 from quadnav.limits import COORDINATE, HEADING_DEGREES, TIME_SCALE
@@ -71,7 +72,7 @@ SUBCOMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [
 def add_tello_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav tello`` and its subcommands (:data:`SUBCOMMANDS`)."""
     tello = subparsers.add_parser(
-        "tello", help="DJI Ryze Tello: emulate one, or fly a plan on one",
+        "tello", help=command_help("tello"),
         description="Work with a DJI Ryze Tello through its SDK 2.0 (the djitellopy client).")
     commands = tello.add_subparsers(dest="tello_command", metavar="SUBCOMMAND", required=True)
     for add in SUBCOMMANDS:

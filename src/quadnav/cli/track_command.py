@@ -15,6 +15,7 @@ from quadnav.cli.args import (
     simulation_settings,
     vehicle_and_gains,
 )
+from quadnav.cli.commands import command_help
 from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError
@@ -85,7 +86,7 @@ def _print_summary(m: dict) -> None:
 def add_track_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav track`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "track", help="fly a given reference (a step, a helix, an MP.csv...) to tune gains",
+        "track", help=command_help("track"),
         description="Fly a reference with the PX4-style cascaded controller on the "
                     "simulated quadrotor, from a hover at its start, in an empty box round "
                     "it (1 m beyond its bounding box; the floor at z = 0 when it stays "

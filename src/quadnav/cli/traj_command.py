@@ -14,6 +14,7 @@ from quadnav.cli.args import (
     resolve_margin,
     speed,
 )
+from quadnav.cli.commands import command_help
 from quadnav.limits import (
     ACCELERATION,
     MAX_DURATION,
@@ -93,7 +94,7 @@ def traj(args: argparse.Namespace) -> int:
 def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav traj`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "traj", help="a smooth, timed trajectory through a path",
+        "traj", help=command_help("traj"),
         description="Turn a path (e.g. DIR/path.csv from quadnav plan) into a smooth, timed "
                     "trajectory that stays in the map's free space, and write "
                     "DIR/trajectory.csv, DIR/MP.csv (the course layout), DIR/trajectory.json "

@@ -7,6 +7,7 @@ import argparse
 import sys
 
 from quadnav.cli.args import add_executor_arguments, number_in, seed_value, workers_description
+from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
 from quadnav.runfolder import check_output_folder
@@ -124,7 +125,7 @@ def add_tune_command(subparsers: argparse._SubParsersAction) -> None:
     from quadnav.control.gains import course_gain_names
 
     p = subparsers.add_parser(
-        "tune", help="tune the controller's gains by an Optuna search (needs quadnav[tune])",
+        "tune", help=command_help("tune"),
         description="Search the cascade's gains (Optuna: TPE or CMA-ES) for a vehicle against "
                     "a training set of references and missions, then compare the vehicle's "
                     "own gains, the course's gain tables and the tuned gains on a held-out "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from quadnav.cli.commands import command_help
 from quadnav.report.rundir import VIEW_PAGE, read_run
 from quadnav.viz.html_viewer import write_viewer
 
@@ -23,7 +24,7 @@ def view(args: argparse.Namespace) -> int:
 def add_view_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav view`` on the top-level subparsers."""
     p = subparsers.add_parser(
-        "view", help="write an interactive 3D page (HTML) of a quadnav fly or track output folder",
+        "view", help=command_help("view"),
         description="Write one self-contained HTML page showing the run in DIR (written by "
                     "quadnav fly -o DIR or quadnav track REF -o DIR): the map, the explored "
                     "tree, the path, the trajectory coloured by speed, the flown track, a "

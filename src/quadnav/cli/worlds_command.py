@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 
+from quadnav.cli.commands import command_help
 from quadnav.specs import SpecInfo
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC, describe_worlds
 
@@ -34,7 +35,7 @@ def worlds(args: argparse.Namespace) -> int:
 
 def add_worlds_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav worlds`` on the top-level subparsers."""
-    parser = subparsers.add_parser("worlds", help="list the built-in worlds and their parameters",
+    parser = subparsers.add_parser("worlds", help=command_help("worlds"),
                                    description="List the built-in worlds and their parameters.")
     parser.set_defaults(handler=worlds)
 
@@ -55,7 +56,7 @@ def references(args: argparse.Namespace) -> int:
 def add_references_command(subparsers: argparse._SubParsersAction) -> None:
     """Register ``quadnav references`` on the top-level subparsers."""
     parser = subparsers.add_parser(
-        "references", help="list the built-in references of quadnav track and their parameters",
+        "references", help=command_help("references"),
         description="List the built-in references that quadnav track flies, and their "
                     "parameters.")
     parser.set_defaults(handler=references)
