@@ -19,6 +19,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import read_only
 from quadnav.errors import QuadnavError
 
 C = TypeVar("C")
@@ -27,8 +28,7 @@ C = TypeVar("C")
 def frozen_vector(values: ArrayLike, length: int) -> NDArray[np.float64]:
     """A read-only float64 copy of ``values`` with shape ``(length,)``."""
     array = np.array(values, dtype=np.float64).reshape(length)
-    array.flags.writeable = False
-    return array
+    return read_only(array)
 
 
 def vector_field(*values: float) -> Any:

@@ -19,6 +19,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.errors import PlanningWarning
@@ -33,7 +34,7 @@ from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
-from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
+from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.margins import segment_box_margins
 from quadnav.world.model import World
 

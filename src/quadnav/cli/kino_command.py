@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from tqdm import tqdm
 
+from quadnav.arrays import FloatArray
 from quadnav.cli.args import (
     add_margin_argument,
     add_start_goal_arguments,
@@ -59,7 +60,7 @@ from quadnav.kinodynamic.replay6dof import (
     replay_vehicle,
     response_delays,
 )
-from quadnav.kinodynamic.result import FloatArray, KinoResult
+from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import MAP2D_SUFFIX, World2D, load_world2d
 from quadnav.limits import (

@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.config import as_plain, from_table, frozen_vector, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
-from quadnav.vehicle.params import FloatArray
 
 
 @dataclass(frozen=True, eq=False)

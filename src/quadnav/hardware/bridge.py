@@ -51,11 +51,11 @@ from typing import TextIO
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.hardware.dead_reckoning import DeadReckoning
 from quadnav.hardware.drone_clock import Clock, VirtualClock
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
-from quadnav.hardware.frames import FloatArray
 from quadnav.hardware.geofence import GeofenceError, Region
 from quadnav.hardware.landing import Lander
 from quadnav.hardware.link import (

@@ -34,7 +34,8 @@ import time
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.hardware.frames import FloatArray, TakeoffFrame, body_to_map, map_to_body
+from quadnav.arrays import FloatArray
+from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body
 
 #: Metres per second of one unit of vgx, vgy, vgz (dm/s).
 VELOCITY_UNIT = 0.1

@@ -33,6 +33,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.control.cascade import gain_arrays, new_memory
 from quadnav.control.gains import Gains
 from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
@@ -41,7 +42,7 @@ from quadnav.sim.collision import body_grid
 from quadnav.sim.settings import SimSettings
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, rk4_step, vehicle_arrays
-from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
+from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 
 #: Height of the hover after ``takeoff`` above the floor, m (the SDK's "about 80 cm").

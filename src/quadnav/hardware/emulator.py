@@ -49,6 +49,7 @@ from functools import cache
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.hardware import sdk
@@ -63,7 +64,6 @@ from quadnav.hardware.sdk import (
     Command,
     SdkError,
 )
-from quadnav.vehicle.params import FloatArray
 
 #: Speed of ``up`` ... ``back`` until ``speed`` sets another, cm/s.
 DEFAULT_SPEED_CM_S = 100

@@ -39,8 +39,9 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
-from quadnav.hardware.frames import GROUND_Z, FloatArray, IntArray, TakeoffFrame, to_cm
+from quadnav.hardware.frames import GROUND_Z, IntArray, TakeoffFrame, to_cm
 from quadnav.hardware.geofence import Geofence, Region
 from quadnav.hardware.leg_room import LegRoom
 from quadnav.hardware.lost_link import LostLinkBound, creeping_pace

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-FloatArray = NDArray[np.float64]
+from quadnav.arrays import FloatArray
+
 IntArray = NDArray[np.int64]
 
 #: Height of the floor the drone takes off from and lands on, map frame, metres.

@@ -19,8 +19,9 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.hardware.frames import GROUND_Z, FloatArray
+from quadnav.hardware.frames import GROUND_Z
 from quadnav.world.model import Hit, World
 from quadnav.world.placement import format_box, format_point
 

@@ -34,7 +34,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.hardware.frames import FloatArray
+from quadnav.arrays import FloatArray
 from quadnav.hardware.geofence import Region
 from quadnav.hardware.rc import RC_FULL_SPEED, STICK_MAX
 from quadnav.hardware.sdk import AUTO_LAND_AFTER

@@ -23,7 +23,8 @@ from itertools import combinations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.hardware.frames import FloatArray, IntArray, body_to_map, map_to_body
+from quadnav.arrays import FloatArray
+from quadnav.hardware.frames import IntArray, body_to_map, map_to_body
 
 #: Speed of a full stick (100), m/s (the Tello's default, slow, flight mode).
 RC_FULL_SPEED = 1.0

@@ -36,14 +36,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
+from quadnav.kinodynamic.tree import ControlTree
 from quadnav.kinodynamic.world2d import World2D, format_rect
 from quadnav.planning.legs import find_leg
 from quadnav.planning.result import path_length
-
-FloatArray = NDArray[np.float64]
 
 NAME = "diffdrive"
 #: Largest distance between a checked chord and the arc it stands for, metres.
@@ -291,33 +291,6 @@ def leg_motions(model: DiffDrive, heading: float, leg: FloatArray
     return motions
 
 
-class _Tree:
-    """Preallocated tree arrays; row 0 is the start."""
-
-    def __init__(self, start: FloatArray, capacity: int) -> None:
-        self.states = np.zeros((capacity, 3))
-        self.parents = np.full(capacity, -1, dtype=np.int64)
-        self.controls = np.zeros((capacity, 2))
-        self.durations = np.zeros(capacity)
-        self.states[0] = start
-        self.count = 1
-
-    def add(self, parent: int, control: FloatArray, duration: float, state: FloatArray
-            ) -> int:
-        i = self.count
-        self.states[i], self.parents[i] = state, parent
-        self.controls[i], self.durations[i] = control, duration
-        self.count += 1
-        return i
-
-    def branch(self, node: int) -> list[int]:
-        """Rows from the start to ``node``."""
-        rows = [node]
-        while self.parents[rows[-1]] >= 0:
-            rows.append(int(self.parents[rows[-1]]))
-        return rows[::-1]
-
-
 def _sample_target(rng: np.random.Generator, settings: KinoSettings, free: World2D,
                    goal: FloatArray, closest: float) -> FloatArray:
     """The point (2,) the tree grows towards: with ``settings.biased``, with probability
@@ -371,24 +344,24 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
     clock = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
     motions = leg_motions(model, float(start[2]), leg)
-    tree = _Tree(start, settings.max_iterations + 1 + len(motions))
+    tree = ControlTree(start, 2, capacity=settings.max_iterations + 1 + len(motions))
     for state, control, duration in motions:
-        tree.add(tree.count - 1, control, duration, state)
-    closest = float(np.hypot(*(tree.states[tree.count - 1, :2] - goal)))
-    reached = tree.count - 1 if closest <= settings.goal_radius else -1
+        tree.add(tree.size - 1, state, control, duration)
+    closest = float(np.hypot(*(tree.states[tree.size - 1, :2] - goal)))
+    reached = tree.size - 1 if closest <= settings.goal_radius else -1
     iterations, reported = 0, 0.0
     elapsed = time.perf_counter() - clock
     while reached < 0 and iterations < settings.max_iterations and elapsed < settings.time_limit:
         iterations += 1
         target = _sample_target(rng, settings, free, goal, closest)
-        gaps = tree.states[:tree.count, :2] - target
+        gaps = tree.states[:tree.size, :2] - target
         near = int(np.argmin(np.einsum("ij,ij->i", gaps, gaps)))
         controls = model.sample_controls(rng, settings.controls_per_extension)
         ends, ok = _extend(free, tree.states[near], controls, settings.duration)
         if ok.any():
             candidates = np.flatnonzero(ok)
             best = candidates[np.argmin(np.hypot(*(ends[candidates, :2] - target).T))]
-            node = tree.add(near, controls[best], settings.duration, ends[best])
+            node = tree.add(near, ends[best], controls[best], settings.duration)
             distance = float(np.hypot(*(ends[best, :2] - goal)))
             closest = min(closest, distance)
             if distance <= settings.goal_radius:
@@ -396,21 +369,15 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
         elapsed = time.perf_counter() - clock
         if progress is not None and elapsed - reported >= PROGRESS_SECONDS:
             reported = elapsed
-            progress(_budget_used(settings, iterations, elapsed), closest)
+            progress(settings.budget_used(iterations, elapsed), closest)
     if progress is not None:
-        progress(1.0 if reached < 0 else _budget_used(settings, iterations, elapsed), closest)
+        progress(1.0 if reached < 0 else settings.budget_used(iterations, elapsed), closest)
     return _result(tree, reached, settings, iterations, time.perf_counter() - clock, closest)
 
 
-def _budget_used(settings: KinoSettings, iterations: int, elapsed: float) -> float:
-    return min(max(iterations / settings.max_iterations, elapsed / settings.time_limit), 1.0)
-
-
-def _result(tree: _Tree, reached: int, settings: KinoSettings, iterations: int,
+def _result(tree: ControlTree, reached: int, settings: KinoSettings, iterations: int,
             seconds: float, closest: float) -> KinoResult:
-    n = tree.count
-    whole = (tree.states[:n].copy(), tree.parents[:n].copy(), tree.controls[:n].copy(),
-             tree.durations[:n].copy())
+    whole = tree.arrays()
     if reached < 0:
         return KinoResult(NAME, False, np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0),
                           *whole, iterations, seconds, None, settings.seed,

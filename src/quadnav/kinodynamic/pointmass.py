@@ -41,11 +41,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -38,15 +38,12 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.kinodynamic.pointmass import (
-    FloatArray,
-    SampledQuadrotor,
-    exact_positions,
-    exact_states,
-)
+from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions, exact_states
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
+from quadnav.kinodynamic.tree import ControlTree
 from quadnav.planning.problem import make_problem
 from quadnav.world.model import World
 
@@ -72,45 +69,25 @@ REPLAY_TOLERANCE = 1e-9
 Progress = Callable[[float, float], None]
 
 
-class _Tree:
-    """Growable arrays of the tree: states, parents, controls, durations, and the points
-    :meth:`nearest` measures from."""
+class _Tree(ControlTree):
+    """The tree's arrays and, per vertex, the point :meth:`nearest` measures from."""
 
-    def __init__(self, start_state: FloatArray, capacity: int = 1024) -> None:
-        self.size = 1
-        self.states = np.zeros((capacity, 6))
-        self.parents = np.full(capacity, -1, dtype=np.int64)
-        self.controls = np.zeros((capacity, 3))
-        self.durations = np.zeros(capacity)
-        self.keys = np.zeros((capacity, 3))
-        self.states[0] = start_state
-        self.keys[0] = _key(start_state)
+    COLUMNS = (*ControlTree.COLUMNS, "keys")
+
+    def __init__(self, start_state: FloatArray) -> None:
+        super().__init__(start_state, 3)
+        self.keys = np.zeros((len(self.states), 3))
+        self.keys[0] = _key(self.states[0])
 
     def add(self, parent: int, state: FloatArray, control: FloatArray, duration: float
             ) -> int:
-        if self.size == len(self.states):
-            for name in ("states", "parents", "controls", "durations", "keys"):
-                old = getattr(self, name)
-                grown = np.zeros((2 * len(old), *old.shape[1:]), dtype=old.dtype)
-                grown[:len(old)] = old
-                setattr(self, name, grown)
-        index = self.size
-        self.states[index], self.parents[index] = state, parent
-        self.controls[index], self.durations[index] = control, duration
+        index = super().add(parent, state, control, duration)
         self.keys[index] = _key(state)
-        self.size += 1
         return index
 
     def nearest(self, point: FloatArray) -> int:
         differences = self.keys[:self.size] - point
         return int(np.argmin(np.einsum("ij,ij->i", differences, differences)))
-
-    def branch(self, leaf: int) -> list[int]:
-        """Indices from the start to ``leaf``."""
-        indices = [leaf]
-        while self.parents[indices[-1]] >= 0:
-            indices.append(int(self.parents[indices[-1]]))
-        return indices[::-1]
 
 
 def _key(state: FloatArray) -> FloatArray:
@@ -169,7 +146,7 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         if elapsed >= settings.time_limit:
             break
         if progress is not None and iterations % PROGRESS_EVERY == 0:
-            progress(_fraction(iterations, elapsed, settings), closest)
+            progress(settings.budget_used(iterations, elapsed), closest)
         iterations += 1
         if settings.biased and rng.random() < settings.goal_bias:
             sample = goal_point + rng.normal(scale=GOAL_SPREAD * closest, size=3)
@@ -187,7 +164,7 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
             reached, time_to_goal = index, time.perf_counter() - clock
     seconds = time.perf_counter() - clock
     if progress is not None:
-        progress(1.0 if reached >= 0 else _fraction(iterations, seconds, settings), closest)
+        progress(1.0 if reached >= 0 else settings.budget_used(iterations, seconds), closest)
     branch = tree.branch(reached) if reached >= 0 else []
     n = tree.size
     outcome = (f"reached the goal region in {iterations} iterations" if reached >= 0 else
@@ -293,10 +270,6 @@ def _lowest_heights(state: FloatArray, accelerations: FloatArray, duration: floa
     return np.where(inside, np.minimum(lowest, z - 0.5 * vz * vz / np.where(inside, az, 1.0)),
                     lowest)
 
-
-def _fraction(iterations: int, elapsed: float, settings: KinoSettings) -> float:
-    """Fraction of the budget (iterations or time, whichever is further) used."""
-    return min(max(iterations / settings.max_iterations, elapsed / settings.time_limit), 1.0)
 
 
 def replay(model: SampledQuadrotor, start_state: ArrayLike, controls: ArrayLike,

@@ -52,10 +52,11 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.control.cascade import GainArrays, attitude_control, gain_arrays, new_memory
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
-from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor
+from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_STEP
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import (

@@ -13,13 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from quadnav.arrays import FloatArray, read_only
+
 IntArray = NDArray[np.int64]
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    array.flags.writeable = False
-    return array
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,7 +60,7 @@ class KinoResult:
                      "tree_controls", "tree_durations"):
             value = getattr(self, name)
             dtype = np.int64 if name == "tree_parents" else np.float64
-            object.__setattr__(self, name, _read_only(np.array(value, dtype=dtype)))
+            object.__setattr__(self, name, read_only(np.array(value, dtype=dtype)))
         if len(self.controls) != max(len(self.states) - 1, 0) or len(self.durations) != len(
                 self.controls):
             raise ValueError("a plan of K states needs K - 1 controls and durations")

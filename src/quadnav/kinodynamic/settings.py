@@ -49,6 +49,11 @@ class KinoSettings:
         _DURATION.check(self.duration, "control duration")
         _CONTROLS.check(self.controls_per_extension, "controls per extension")
 
+    def budget_used(self, iterations: int, elapsed: float) -> float:
+        """Share of the budget used after ``iterations`` extensions and ``elapsed`` s:
+        of the iterations or of the time, whichever is further, at most 1."""
+        return min(max(iterations / self.max_iterations, elapsed / self.time_limit), 1.0)
+
     def replace(self, **changes: object) -> KinoSettings:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""
         return dataclasses.replace(self, **changes)

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray, read_only
 from quadnav.errors import MapError, QuadnavError
 from quadnav.world import World, load_world
 from quadnav.world.reading import (
@@ -43,8 +44,6 @@ from quadnav.world.reading import (
     parse_float,
     read_file,
 )
-
-FloatArray = NDArray[np.float64]
 
 #: Half thickness of the slab the equivalent 3D world spans, metres.
 SLAB = 1.0
@@ -60,8 +59,7 @@ def _frozen(values: ArrayLike, shape: tuple[int, int] | tuple[int], what: str) -
         raise ValueError(f"{what} must be finite")
     if np.any(array[..., :2] >= array[..., 2:]):
         raise ValueError(f"{what}: every min must be below its max")
-    array.flags.writeable = False
-    return array
+    return read_only(array)
 
 
 @dataclass(frozen=True, eq=False)

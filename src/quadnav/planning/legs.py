@@ -31,10 +31,11 @@ import numpy as np
 from scipy.sparse import coo_matrix, csc_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.result import path_length
 from quadnav.world.margins import point_margins
-from quadnav.world.model import FloatArray, World
+from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
 #: How far past the margin a leg ends, as a fraction of the margin, where there is room:

@@ -63,11 +63,11 @@ from ompl import util as ou
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.registry import OMPL_PLANNERS, OMPL_PREFIX, Progress
 from quadnav.planning.result import (
-    FloatArray,
     IntArray,
     PlanResult,
     PlanStats,

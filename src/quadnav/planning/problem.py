@@ -24,11 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.planning.legs import find_leg
 from quadnav.planning.result import path_length
 from quadnav.world.connectivity import disconnected
-from quadnav.world.model import FloatArray, World
+from quadnav.world.model import World
 from quadnav.world.placement import classify_point, format_point
 
 

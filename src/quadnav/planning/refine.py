@@ -10,9 +10,10 @@ from __future__ import annotations
 import dataclasses
 import time
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.result import FloatArray, PlanResult, PostStep, path_length
+from quadnav.planning.result import PlanResult, PostStep, path_length
 from quadnav.planning.shortcut import shortcut_path
 from quadnav.planning.smoothing import smooth_path
 

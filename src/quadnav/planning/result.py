@@ -13,9 +13,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray, read_only
 from quadnav.limits import PLAN_ITERATIONS
 
-FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
@@ -31,11 +31,6 @@ def distinct(points: ArrayLike) -> FloatArray:
     """``points`` (N, 3) as float64 with consecutive repeats dropped."""
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     return pts[np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])]
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    array.flags.writeable = False
-    return array
 
 
 @dataclass(frozen=True)
@@ -83,7 +78,7 @@ class PlanStats:
 
     def __post_init__(self) -> None:
         history = np.array(self.cost_history, dtype=np.float64).reshape(-1, 2)
-        object.__setattr__(self, "cost_history", _read_only(history))
+        object.__setattr__(self, "cost_history", read_only(history))
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,9 +115,9 @@ class PlanResult:
             raise ValueError(f"tree_parents has {len(parents)} entries for {len(nodes)} nodes")
         if self.solved != (len(path) >= 2):
             raise ValueError("a solved result needs a path of at least 2 points, else none")
-        object.__setattr__(self, "path", _read_only(path))
-        object.__setattr__(self, "tree_nodes", _read_only(nodes))
-        object.__setattr__(self, "tree_parents", _read_only(parents))
+        object.__setattr__(self, "path", read_only(path))
+        object.__setattr__(self, "tree_nodes", read_only(nodes))
+        object.__setattr__(self, "tree_parents", read_only(parents))
 
     @property
     def length(self) -> float:

@@ -12,9 +12,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.result import distinct, path_length
-from quadnav.world.model import FloatArray, World
+from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
 #: Default number of random shortcut attempts per vertex left by the greedy pass.

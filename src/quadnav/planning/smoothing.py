@@ -18,10 +18,11 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.result import IntArray, path_length
 from quadnav.planning.shortcut import free_polyline, polyline_segments
-from quadnav.world.model import FloatArray, World
+from quadnav.world.model import World
 
 #: Default ``max_spacing``: the path length divided by this many pieces.
 DEFAULT_PIECES = 100

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
@@ -40,7 +41,6 @@ from quadnav.sim.flight import Flight
 from quadnav.tracking import Tracking
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
 from quadnav.trajectory.reference import Reference, Samples
-from quadnav.vehicle.params import FloatArray
 from quadnav.world import World, read_map
 from quadnav.world.mapfile import format_map
 

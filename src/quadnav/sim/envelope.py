@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED
@@ -26,7 +27,7 @@ from quadnav.trajectory.feasibility import (
     slowest_feasible_scale,
 )
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace
 from quadnav.vehicle.params import VehicleParams
 

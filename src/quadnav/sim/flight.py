@@ -7,7 +7,7 @@ from enum import Enum
 
 import numpy as np
 
-from quadnav.vehicle.params import FloatArray
+from quadnav.arrays import FloatArray
 
 
 class Ending(Enum):

@@ -6,9 +6,9 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from quadnav.arrays import FloatArray
 from quadnav.config import frozen_vector, require, vector_field
 from quadnav.limits import FORCE, GUSTS, RATE, SEED, SETTLE
-from quadnav.vehicle.params import FloatArray
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.control.cascade import gain_arrays, new_memory
 from quadnav.control.gains import Gains
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
@@ -24,7 +25,7 @@ from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.reference import Reference
 from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, vehicle_arrays
-from quadnav.vehicle.params import FloatArray, VehicleParams, load_params
+from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 
 #: Simulated seconds per call of the compiled loop.

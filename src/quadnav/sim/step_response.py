@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.vehicle.params import FloatArray
+from quadnav.arrays import FloatArray
 
 #: Half-width of the settling band, as a fraction of the step.
 SETTLING_BAND = 0.02

@@ -34,13 +34,14 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.trajectory.collision import (
     checked_waypoints,
     insert_points,
     require_free_polyline,
 )
-from quadnav.world.model import FloatArray, World
+from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
 #: Gap, metres, that growth leaves between a box face and a block face or the boundary.

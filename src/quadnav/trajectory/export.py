@@ -15,13 +15,9 @@ import math
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.reference import (
-    FloatArray,
-    Reference,
-    grid_times,
-    samples_at,
-)
+from quadnav.trajectory.reference import Reference, grid_times, samples_at
 
 #: Header of :func:`trajectory_csv`: time s, position m, velocity m/s, acceleration
 #: m/s^2, yaw rad.

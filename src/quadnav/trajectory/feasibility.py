@@ -23,8 +23,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.world.model import World
 
 #: Gravitational acceleration, m/s^2.

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED, Range
 from quadnav.planning.result import distinct
@@ -32,7 +33,7 @@ from quadnav.trajectory.cubic import cubic_spline
 from quadnav.trajectory.feasibility import Limits
 from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.minsnap_qp import minimum_snap_qp
-from quadnav.trajectory.model import FloatArray, Trajectory, YawMode
+from quadnav.trajectory.model import Trajectory, YawMode
 from quadnav.trajectory.quintic import quintic_average, quintic_c2, quintic_segments
 from quadnav.trajectory.retime import fastest_times, knots, stretch_where_fast
 from quadnav.trajectory.space import SafeSpace

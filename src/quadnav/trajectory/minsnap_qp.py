@@ -30,9 +30,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.trajectory import polybasis
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polybasis import METHODS
 
 #: Order of the minimised derivative (snap).

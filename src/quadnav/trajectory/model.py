@@ -18,7 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
-from quadnav.trajectory.reference import FloatArray, Sampling
+from quadnav.arrays import FloatArray
+from quadnav.trajectory.reference import Sampling
 
 #: Below this horizontal speed, m/s, a travel-facing yaw follows the current segment's
 #: direction instead of the velocity.

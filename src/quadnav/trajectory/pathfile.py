@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
 from quadnav.limits import COORDINATE, MAX_WAYPOINTS
-from quadnav.world.model import FloatArray
 from quadnav.world.reading import check_line_length, decode_text, read_file
 
 #: The header ``quadnav plan`` writes and this reader expects.

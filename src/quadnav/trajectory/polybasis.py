@@ -20,10 +20,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import sparse
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.trajectory.model import Trajectory, ppoly_from_ascending
-
-FloatArray = NDArray[np.float64]
 
 #: Trajectory method names by the order ``r`` of the minimised derivative.
 METHODS = {3: "minjerk", 4: "minsnap"}

@@ -21,8 +21,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import solve_banded
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polybasis import check_waypoints_and_times, derivative_rows, make_trajectory
 from quadnav.trajectory.timing import segment_lengths
 

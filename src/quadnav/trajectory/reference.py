@@ -19,11 +19,11 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.limits import MAX_SAMPLES, check_count
 
-FloatArray = NDArray[np.float64]
 #: A last sample closer than this share of the interval to the end is moved to the end
 #: rather than followed by it (two times that close would print alike).
 END_SNAP = 1e-6

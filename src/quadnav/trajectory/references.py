@@ -28,10 +28,11 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_DURATION, SPEED, Range
 from quadnav.specs import AXIS, FLOAT, INT, Param, SpecError, SpecInfo, describe_params, parse_spec
-from quadnav.trajectory.reference import FloatArray, Reference, Sampling
+from quadnav.trajectory.reference import Reference, Sampling
 from quadnav.trajectory.sampled import COURSE_MP_RATE, is_reference_file, read_reference_file
 from quadnav.trajectory.timelaw import PhaseLaw
 

@@ -31,8 +31,9 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from quadnav.arrays import FloatArray
 from quadnav.trajectory.feasibility import Limits, quantities
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
 from quadnav.trajectory.timing import rest_to_rest_distance, rest_to_rest_duration
 

@@ -29,12 +29,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
 from quadnav.limits import COORDINATE, MAX_DURATION, MAX_SAMPLES, Range
 from quadnav.trajectory.export import CSV_HEADER, MP_ROWS
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.quintic import hermite_trajectory
-from quadnav.trajectory.reference import FloatArray, Samples, Sampling
+from quadnav.trajectory.reference import Samples, Sampling
 from quadnav.world.reading import decode_text, read_file
 
 #: Columns per second of an MP.csv that the course's code plays (one every 0.05 s), Hz.

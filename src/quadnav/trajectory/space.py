@@ -25,10 +25,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, PPoly
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.legs import leg_world
 from quadnav.trajectory.collision import check_samples
-from quadnav.trajectory.model import FloatArray, Trajectory
+from quadnav.trajectory.model import Trajectory
 from quadnav.world.margins import box_margins, rounded
 from quadnav.world.model import World
 from quadnav.world.placement import format_point

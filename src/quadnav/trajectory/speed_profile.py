@@ -25,8 +25,8 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.model import FloatArray
 
 
 def fastest_speeds(arc_length: ArrayLike, curvature: ArrayLike, v_max: float,

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from quadnav.trajectory.reference import FloatArray
+from quadnav.arrays import FloatArray
 
 
 def smoothstep(u: FloatArray) -> FloatArray:

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import minimize
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.model import FloatArray
 from quadnav.trajectory.polybasis import check_waypoints_and_times
 
 #: Default top speed, m/s, of every trajectory (``fly``, ``traj`` and the library): an

@@ -26,8 +26,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from quadnav.arrays import FloatArray
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.params import FloatArray, VehicleParams
+from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotors import SPIN, allocation_matrix
 
 STATE_SIZE = 17

@@ -20,12 +20,10 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
 
+from quadnav.arrays import FloatArray
 from quadnav.config import from_table, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
-
-FloatArray = NDArray[np.float64]
 
 #: Standard gravity, m/s^2.
 GRAVITY = 9.81

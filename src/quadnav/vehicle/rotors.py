@@ -14,7 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
-from quadnav.vehicle.params import FloatArray, VehicleParams
+from quadnav.arrays import FloatArray
+from quadnav.vehicle.params import VehicleParams
 
 #: Rotor directions from the centre, as (x, y) unit multiples, rotors 1-4.
 ROTOR_DIRECTIONS = np.array([[1.0, -1.0], [-1.0, 1.0], [1.0, 1.0], [-1.0, -1.0]]) / math.sqrt(2)

@@ -13,7 +13,8 @@ from matplotlib.lines import Line2D
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from numpy.typing import ArrayLike
 
-from quadnav.kinodynamic.pointmass import FloatArray, SampledQuadrotor, exact_positions
+from quadnav.arrays import FloatArray
+from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import draw_world, map_legend

@@ -20,11 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.world.model import World
-
-FloatArray = NDArray[np.float64]
 
 
 @njit(cache=True, parallel=True)

@@ -14,11 +14,10 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from quadnav.arrays import FloatArray, read_only
 from quadnav.errors import QuadnavError
 from quadnav.limits import MARGIN, MAX_BLOCKS, WORLD_COORDINATE
 from quadnav.world import blockgrid, geometry, volume
-
-FloatArray = NDArray[np.float64]
 
 #: Boxes the exact free volume may visit (30-90 ns each) before it is estimated instead.
 EXACT_BUDGET = 5_000_000
@@ -48,8 +47,7 @@ def _frozen(values: ArrayLike, shape: tuple[int, ...], what: str,
         raise QuadnavError(f"{what} must be finite")
     if not np.all((low <= array) & (array <= high)):
         raise QuadnavError(f"{what} must be from {low:g} to {high:g}")
-    array.flags.writeable = False
-    return array
+    return read_only(array)
 
 
 def _check_boxes(boxes: FloatArray, what: str) -> None:

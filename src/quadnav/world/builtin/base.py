@@ -12,12 +12,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from quadnav.arrays import FloatArray
 from quadnav.limits import COORDINATE, Range
 from quadnav.specs import Param
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -13,16 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.limits import Range
 from quadnav.specs import FLOAT, SEED_PARAM, SIZE, Param, SpecError
-from quadnav.world.builtin.base import (
-    FloatArray,
-    Generator,
-    Layout,
-    corner_start_goal,
-    shaded,
-    sizes,
-)
+from quadnav.world.builtin.base import Generator, Layout, corner_start_goal, shaded, sizes
 
 TRUNK_COLOR = (0.45, 0.3, 0.15)
 BRANCH_COLOR = (0.3, 0.55, 0.2)

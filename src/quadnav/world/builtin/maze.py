@@ -12,9 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.limits import Range
 from quadnav.specs import FLOAT, GRID, INT, SEED_PARAM, Param, SpecError
-from quadnav.world.builtin.base import FloatArray, Generator, Layout, plate_with_hole, shaded
+from quadnav.world.builtin.base import Generator, Layout, plate_with_hole, shaded
 
 WALL_COLOR = (0.6, 0.6, 0.62)
 SLAB_COLOR = (0.35, 0.45, 0.65)
