@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -11,6 +12,9 @@ from hypothesis import settings
 # Property tests draw the same examples on every run, so a CI result can be reproduced.
 settings.register_profile("quadnav", derandomize=True, database=None)
 settings.load_profile("quadnav")
+
+# Figures are drawn off-screen, as the quadnav command draws them.
+os.environ.setdefault("MPLBACKEND", "Agg")
 
 SHARED_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 

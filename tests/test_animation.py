@@ -16,7 +16,8 @@ from PIL import Image
 from quadnav.cli.main import main
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
-from quadnav.report.rundir import read_run, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import read_run
 from quadnav.viz.animation import DRONE_COLOR, frame_times, gif_rate, save_animation
 from quadnav.world import load_world
 

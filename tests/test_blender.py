@@ -16,7 +16,8 @@ from matplotlib.image import imread
 
 from quadnav.cli.main import main
 from quadnav.mission import fly_mission
-from quadnav.report.rundir import read_run, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import read_run
 from quadnav.vehicle.quaternion import to_matrix
 from quadnav.viz.blender_scene import BOUNDARY_ALPHA, MAX_TREE_EDGES, PATH_ALPHA, linear_rgb
 from quadnav.world import load_world

@@ -20,7 +20,8 @@ from quadnav.hardware.flight_plan import plan_flight
 from quadnav.hardware.track_figure import track_figure
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings, get_planner, make_problem
-from quadnav.report.rundir import read_run, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import read_run
 from quadnav.trajectory.generate import make_trajectory
 from quadnav.viz.flight_figures import flight_3d_figure
 from quadnav.viz.map3d import MIN_SIDE, world_figure

@@ -13,7 +13,8 @@ from mpl_toolkits.mplot3d import Axes3D
 
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
-from quadnav.report.rundir import FIGURES, REPORT, Run, read_run, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import FIGURES, REPORT, Run, read_run
 from quadnav.sim.flight import Ending
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import make_trajectory

@@ -134,7 +134,7 @@ def test_a_start_inside_a_block_is_a_user_error(tmp_path, shared_maps):
 
 
 def test_a_run_folder_reads_back(tmp_path):
-    from quadnav.report.rundir import read_run
+    from quadnav.runs import read_run
 
     out = tmp_path / "out"
     assert run_here("fly", SMALL, "-o", out, "--quiet", "--no-figures").returncode == 0
@@ -155,7 +155,7 @@ def test_a_run_folder_reads_back(tmp_path):
 
 def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):
     from quadnav.errors import QuadnavError
-    from quadnav.report.rundir import read_run
+    from quadnav.runs import read_run
 
     with pytest.raises(QuadnavError, match="not a quadnav fly or track output folder"):
         read_run(tmp_path)

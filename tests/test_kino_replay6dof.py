@@ -15,7 +15,7 @@ from quadnav.errors import QuadnavError
 from quadnav.kinodynamic import KinoResult, KinoSettings
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import plan_quadrotor, replay
-from quadnav.kinodynamic.replay6dof import (
+from quadnav.sim.replay6dof import (
     DRIFT_RATE,
     replay_6dof,
     replay_6dof_tolerance,

@@ -17,7 +17,8 @@ from quadnav.cli.main import main
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
 from quadnav.report.html_report import flatten
-from quadnav.report.rundir import FIGURES, REPORT, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import FIGURES, REPORT
 from quadnav.world import load_world
 
 SMALL = "forest:size=12x12x4,seed=2"

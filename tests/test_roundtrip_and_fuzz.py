@@ -4,7 +4,6 @@ the command line (every input gets a clean answer)."""
 from __future__ import annotations
 
 import contextlib
-import functools
 import re
 import signal
 import warnings
@@ -161,8 +160,9 @@ def quadnav_cli(capsys, monkeypatch):
     failing the test on anything but a clean answer."""
     from quadnav.cli import main as cli
 
-    # One parser for every call: building it takes most of a call's time.
-    monkeypatch.setattr(cli, "build_parser", functools.cache(cli.build_parser))
+    # One parser, with every command, for every call: building it takes most of a call's time.
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda argv=None: parser)
     monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)  # main replaces it
     monkeypatch.setattr(signal, "signal", signal.signal)
     previous = signal.signal(signal.SIGALRM, _hung)

@@ -26,8 +26,8 @@ from clitools import QUADNAV
 from quadnav.cli.launch import stop_again
 from quadnav.cli.main import main
 from quadnav.errors import QuadnavError
-from quadnav.report.rundir import FIGURES, REPORT
 from quadnav.runfolder import STAGING_PREFIX, _SignalGate, check_output_folder, replaced_folder
+from quadnav.runs import FIGURES, REPORT
 from quadnav.signals import Stopped
 
 SMALL = "forest:size=12x12x4,seed=2"

@@ -11,7 +11,7 @@ import pytest
 from clitools import assert_user_error, run, run_here
 from figurecheck import assert_labels_apart, assert_legends_outside
 
-from quadnav.report.rundir import FIGURES, REPORT, read_run
+from quadnav.runs import FIGURES, REPORT, read_run
 from quadnav.viz.flight_figures import flight_states_figure
 
 RUN_FILES = ["metrics.json", "parameters.json", "map.json", "trajectory.csv", "flight.csv"]

@@ -21,7 +21,8 @@ from PIL import Image
 from quadnav.cli.main import main
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
-from quadnav.report.rundir import VIEW_PAGE, read_run, write_run
+from quadnav.report.run_writer import write_run
+from quadnav.runs import VIEW_PAGE, read_run
 from quadnav.viz.html_viewer import (
     MAX_TREE_EDGES,
     viewer_data,

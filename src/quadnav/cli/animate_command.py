@@ -9,7 +9,7 @@ from quadnav.cli.args import number_in
 from quadnav.cli.commands import command_help
 from quadnav.cli.progress import fraction_bar
 from quadnav.limits import Range
-from quadnav.report.rundir import read_run
+from quadnav.runs import read_run
 
 #: The animation's file name in DIR when no -o is given.
 DEFAULT_NAME = "flight.gif"

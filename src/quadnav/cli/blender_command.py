@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from quadnav.cli.commands import command_help
-from quadnav.report.rundir import read_run
+from quadnav.runs import read_run
 from quadnav.viz.blender_scene import (
     CAMERAS,
     DEFAULT_FPS,

@@ -36,8 +36,9 @@ from quadnav.mission import (
     fly_problem,
 )
 from quadnav.planning import get_planner, make_problem
-from quadnav.report.rundir import FIGURES, REPORT, write_run
+from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder
+from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.flight import Flight
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world

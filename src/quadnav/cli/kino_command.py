@@ -53,13 +53,6 @@ from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_TOLERANCE, plan_quadrotor, replay
-from quadnav.kinodynamic.replay6dof import (
-    DRIFT_RATE,
-    replay_6dof,
-    replay_6dof_tolerance,
-    replay_vehicle,
-    response_delays,
-)
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.world2d import MAP2D_SUFFIX, World2D, load_world2d
@@ -72,6 +65,13 @@ from quadnav.limits import (
     PLAN_TIME,
 )
 from quadnav.runfolder import check_output_folder, replaced_folder
+from quadnav.sim.replay6dof import (
+    DRIFT_RATE,
+    replay_6dof,
+    replay_6dof_tolerance,
+    replay_vehicle,
+    response_delays,
+)
 from quadnav.world import load_world
 
 if TYPE_CHECKING:
@@ -298,7 +298,7 @@ def replay_error(model: SampledQuadrotor, result: KinoResult) -> float | None:
 def replay_6dof_summary(model: SampledQuadrotor, result: KinoResult
                         ) -> tuple[dict[str, Any], FloatArray | None]:
     """The plan's controls flown open loop through the 6-DOF dynamics of
-    :func:`~quadnav.kinodynamic.replay6dof.replay_vehicle`: ``kino.json``'s entry (largest
+    :func:`~quadnav.sim.replay6dof.replay_vehicle`: ``kino.json``'s entry (largest
     distance from the planned positions, m; the tolerance at the end of the flight, m;
     whether every planned state is within the tolerance at its time; the vehicle and the
     leads, s) and the flown positions (N, 3), ``None`` without a plan."""

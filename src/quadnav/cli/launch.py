@@ -112,6 +112,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Install the stop-signal handlers, then run the command line."""
     install_stop_handlers()
     sys.unraisablehook = stop_again
+    os.environ.setdefault("MPLBACKEND", "Agg")  # figures go to files: no display needed
     try:
         if command_in(sys.argv[1:] if argv is None else argv) is not None:
             watch_kernel_loads()  # a command runs: it loads compiled kernels (--help does not)

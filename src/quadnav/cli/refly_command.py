@@ -9,8 +9,8 @@ from pathlib import Path
 from quadnav.cli.commands import command_help
 from quadnav.cli.fly_command import write_mission
 from quadnav.errors import QuadnavError
-from quadnav.report.rundir import REPORT
 from quadnav.runfolder import check_output_folder
+from quadnav.runs import REPORT
 
 
 def refly(args: argparse.Namespace) -> int:

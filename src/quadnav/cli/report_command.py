@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from quadnav.cli.commands import command_help
-from quadnav.report.rundir import REPORT, read_run
+from quadnav.runs import REPORT, read_run
 
 
 def report(args: argparse.Namespace) -> int:

@@ -19,8 +19,8 @@ from quadnav.cli.commands import command_help
 from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError
-from quadnav.report.rundir import FIGURES, REPORT
 from quadnav.runfolder import check_output_folder
+from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.reference import Reference
 from quadnav.trajectory.sampled import COURSE_MP_RATE, MP_FORMAT, MP_RATE, TABLE_FORMAT
@@ -29,7 +29,7 @@ from quadnav.trajectory.sampled import COURSE_MP_RATE, MP_FORMAT, MP_RATE, TABLE
 def track(args: argparse.Namespace) -> int:
     """Read the reference, fly it, write the run folder; exit 1 unless the flight ran to
     the end and finished within the goal tolerance of the reference's end."""
-    from quadnav.report.rundir import write_run
+    from quadnav.report.run_writer import write_run
     from quadnav.tracking import track_reference
     from quadnav.trajectory.references import load_reference
 

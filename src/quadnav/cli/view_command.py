@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from quadnav.cli.commands import command_help
-from quadnav.report.rundir import VIEW_PAGE, read_run
+from quadnav.runs import VIEW_PAGE, read_run
 from quadnav.viz.html_viewer import write_viewer
 
 

@@ -285,7 +285,7 @@ def replay(model: SampledQuadrotor, start_state: ArrayLike, controls: ArrayLike,
 
     This checks the planner's own propagation; flying the same controls through the full
     6-DOF vehicle (attitude and rotor response) is
-    :func:`quadnav.kinodynamic.replay6dof.replay_6dof`, which reproduces the planned
+    :func:`quadnav.sim.replay6dof.replay_6dof`, which reproduces the planned
     positions only to the tolerance those dynamics allow.
 
     Args:

@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 from quadnav import __version__
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.report.rundir import Run
+from quadnav.runs import Run
 from quadnav.tracking import step_summary
 from quadnav.viz.flight_figures import figure_makers, run_outcome
 

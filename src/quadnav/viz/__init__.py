@@ -1,8 +1,6 @@
-"""Figures: 3D views of worlds (and, later, plans and flights).
+"""Figures: 3D views of worlds, plans, trajectories and flights, drawn with matplotlib.
 
-Figures are drawn off-screen (matplotlib's Agg backend), so no display is needed.
+Importing this package leaves matplotlib's backend alone (a user's session keeps its
+own); the ``quadnav`` command draws off-screen with the Agg backend (``MPLBACKEND``),
+so it needs no display.
 """
-
-import matplotlib
-
-matplotlib.use("Agg")

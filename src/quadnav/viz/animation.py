@@ -1,4 +1,4 @@
-"""An animation of a run's flight (:class:`~quadnav.report.rundir.Run`): the map in 3D
+"""An animation of a run's flight (:class:`~quadnav.runs.Run`): the map in 3D
 with the path and the trajectory, the flown track growing, the drone (its arms turned by
 the recorded attitude) and the flight time, as a GIF (pillow) or an MP4 (ffmpeg).
 
@@ -25,7 +25,7 @@ from PIL import Image
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.report.rundir import Run
+from quadnav.runs import Run
 from quadnav.vehicle.quaternion import to_matrix
 from quadnav.viz.flight_figures import run_outcome
 from quadnav.viz.layout import finish

@@ -1,4 +1,4 @@
-"""A Blender scene of a run folder (:class:`~quadnav.report.rundir.Run`), saved as a .blend
+"""A Blender scene of a run folder (:class:`~quadnav.runs.Run`), saved as a .blend
 and rendered headless, laid out as the WPI RBE595 course set its scenes up in Blender.
 
 The scene (names in quotes are the Blender object names):
@@ -43,7 +43,7 @@ from matplotlib.colors import to_rgb
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.report.rundir import Run
+from quadnav.runs import Run
 from quadnav.viz.style import (
     DRONE_COLOR,
     DRONE_SCALE,

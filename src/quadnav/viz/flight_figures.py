@@ -1,4 +1,4 @@
-"""Figures of a run folder read back (:class:`~quadnav.report.rundir.Run`, of ``quadnav
+"""Figures of a run folder read back (:class:`~quadnav.runs.Run`, of ``quadnav
 fly`` or ``quadnav track``): the run over the map (in 3D and from above), desired against
 actual states (with a step's response marked), the position tracking error against time,
 and the attitude and motor commands. Legends stand outside the plots.
@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from quadnav.report.rundir import FIGURES, FlightTable, Run
+from quadnav.runs import FIGURES, FlightTable, Run
 from quadnav.sim.flight import Ending
 from quadnav.sim.step_response import SETTLING_BAND
 from quadnav.vehicle.quaternion import euler_angles
@@ -304,7 +304,7 @@ def attitude_motors_figure(run: Run) -> Figure:
 
 def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
     """The figures ``run`` has, by their file name in the run folder, in the order of
-    :data:`~quadnav.report.rundir.FIGURES`: the 3D view always, the states, the tracking
+    :data:`~quadnav.runs.FIGURES`: the 3D view always, the states, the tracking
     error and the attitude and motors when there was a flight."""
     makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
                                 tracking_error_figure, attitude_motors_figure), strict=True))

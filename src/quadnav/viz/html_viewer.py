@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.files import atomic_output
-from quadnav.report.rundir import Run
+from quadnav.runs import Run
 from quadnav.viz.thinning import evenly_spread
 
 #: Tree edges written into the page at most; a larger tree is thinned to an evenly spread

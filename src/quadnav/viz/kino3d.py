@@ -50,7 +50,7 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         model: the vehicle it was planned for (to redraw the parabolas).
         goal: (3,) goal position, m; default the end of the path (none if unsolved).
         flown: (N, 3) positions, m, of the plan's controls flown open loop through the
-            6-DOF dynamics (:func:`~quadnav.kinodynamic.replay6dof.replay_6dof`), drawn
+            6-DOF dynamics (:func:`~quadnav.sim.replay6dof.replay_6dof`), drawn
             dashed (when the plan is solved) with its distance from the planned end.
     """
     fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")

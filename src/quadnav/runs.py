@@ -1,5 +1,6 @@
 """A run folder: what ``quadnav fly`` and ``quadnav track`` write, and :func:`read_run` to
-read it back.
+read it back. This module draws nothing: :func:`quadnav.report.run_writer.write_run` writes
+a whole folder with its figures and pages.
 
 Files (every number SI, world frame z up):
 
@@ -35,7 +36,6 @@ from quadnav.errors import QuadnavError
 from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
 from quadnav.planning.result import IntArray, tree_edges
-from quadnav.runfolder import replaced_folder
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.sim.flight import Flight
 from quadnav.tracking import Tracking
@@ -97,28 +97,9 @@ def run_content(run: Mission | Tracking) -> RunContent:
         plan.path if flown else None, run.trajectory if flown else None, run.flight)
 
 
-def write_run(run: Mission | Tracking | RunContent, folder: str | Path, figures: bool = True,
-              html: bool = False) -> list[str]:
-    """Write the run folder of ``run`` (a mission, a tracking or their
-    :func:`run_content`; the folder is created if needed), whole or not at all
-    (:func:`~quadnav.runfolder.replaced_folder`); returns the names written.
-
-    The text files are written first; the new files are then read back once
-    (:func:`read_run`) and, with ``figures``, the figures and the report are drawn from
-    them, as every other consumer draws them; with ``html``, the interactive page too. All
-    of them reach ``folder`` together at the end, and the files of an earlier run that this
-    one does not write are removed then, so the folder never mixes two runs; an interrupted
-    or failed write leaves it as it was."""
-    folder = Path(folder)
-    content = run if isinstance(run, RunContent) else run_content(run)
-    with replaced_folder(folder, RUN_FILES) as staging:
-        return _write_files(content, staging, folder, figures, html)
-
-
-def _write_files(content: RunContent, staging: Path, folder: Path, figures: bool,
-                 html: bool) -> list[str]:
-    """Write the files of :func:`write_run` into the empty ``staging`` folder; the report
-    names ``folder`` as the run's."""
+def write_run_files(content: RunContent, folder: Path) -> list[str]:
+    """Write the text files of ``content`` (every file of the run folder but the figures
+    and pages) into ``folder``; returns their names."""
     texts = {
         "metrics.json": _json(content.metrics),
         "parameters.json": _json(content.parameters),
@@ -132,27 +113,8 @@ def _write_files(content: RunContent, staging: Path, folder: Path, figures: bool
         texts["trajectory.csv"] = trajectory_csv(content.reference, TRAJECTORY_DT)
         texts["flight.csv"] = flight_csv(content.flight)
     for name, text in texts.items():
-        (staging / name).write_text(text, encoding="utf-8")
-    written = list(texts)
-    if not (figures or html):
-        return written
-    run = read_run(staging)
-    if figures:
-        from quadnav.report.html_report import write_report
-        from quadnav.viz.figures import save_figure
-        from quadnav.viz.flight_figures import figure_makers
-
-        makers = figure_makers(run)
-        for name, make in makers.items():
-            save_figure(make(run), staging / name)
-        write_report([run], staging / REPORT, shown=[folder])
-        written += [*makers, REPORT]
-    if html:
-        from quadnav.viz.html_viewer import write_viewer
-
-        write_viewer(run, staging / VIEW_PAGE)
-        written.append(VIEW_PAGE)
-    return written
+        (folder / name).write_text(text, encoding="utf-8")
+    return list(texts)
 
 
 def _json(value) -> str:

@@ -1,0 +1,42 @@
+"""The stages import only the stages before them: import-linter's layers contract in
+pyproject.toml holds for the package, and breaks for a copy with one import turned round."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "src" / "quadnav"
+
+pytest.importorskip("importlinter", reason="import-linter is in quadnav[test]")
+
+
+def _lint_imports(source: Path, cwd: Path) -> subprocess.CompletedProcess:
+    """``lint-imports`` with the project's contract on the package found in ``source``."""
+    environment = {**os.environ, "PYTHONPATH": str(source)}
+    return subprocess.run([sys.executable, "-c", "from importlinter.cli import lint_imports_command;"
+                           " lint_imports_command()", "--no-cache"], cwd=cwd, env=environment,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_the_stage_order_holds():
+    result = _lint_imports(ROOT / "src", ROOT)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "1 kept, 0 broken" in result.stdout
+
+
+def test_an_earlier_stage_importing_a_later_one_breaks_the_contract(tmp_path):
+    shutil.copytree(PACKAGE, tmp_path / "src" / "quadnav",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path)
+    world = tmp_path / "src" / "quadnav" / "world" / "model.py"
+    world.write_text(world.read_text() + "\nfrom quadnav.viz import figures  # noqa\n")
+    result = _lint_imports(tmp_path / "src", tmp_path)
+    assert result.returncode != 0
+    assert "quadnav.world.model -> quadnav.viz.figures" in result.stdout
