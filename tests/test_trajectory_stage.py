@@ -30,7 +30,7 @@ def contains_in_order(trajectory, points: np.ndarray) -> bool:
     return all(r.size for r in rows) and np.all(np.diff([r[0] for r in rows]) > 0)
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS.names())
 @pytest.mark.parametrize("spec", ["forest", "window", "maze"])
 def test_every_method_is_free_and_passes_every_waypoint(spec, method):
     world, path = planned(spec)
@@ -123,7 +123,7 @@ def test_bad_settings_and_paths_are_user_errors():
         make_trajectory(through_trunk, TrajectorySettings(), SafeSpace(world, 0.2))
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS.names())
 def test_the_result_keeps_within_the_speed_and_acceleration_limits(method):
     _, path = planned("maze")
     settings = TrajectorySettings(method=method, v_max=0.8, a_max=1.0)

@@ -133,7 +133,7 @@ def test_no_method_backs_up_on_any_map(every_path, method):
         assert kept >= margin - CHECK_TOLERANCE, (name, method, kept)
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", METHODS.names())
 def test_every_method_cruises_on_map1(shared_maps, method):
     world, start, goal, margin = course_query(shared_maps, "rbe595/map1.txt")
     path = _planned(world, start, goal, margin)

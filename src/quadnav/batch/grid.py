@@ -419,7 +419,7 @@ def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
     values = {key: _number(table[key], allowed, key, src)
               for key, allowed in checks.items() if key in table}
     if "method" in table:
-        values["method"] = _choice(table["method"], METHODS, "method", src)
+        values["method"] = _choice(table["method"], tuple(METHODS.names()), "method", src)
     if "timing" in table:
         values["timing"] = _choice(table["timing"], TIMINGS, "timing", src)
     vehicle = table.get("vehicle", base.vehicle)

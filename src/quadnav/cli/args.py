@@ -93,7 +93,7 @@ def speed_or_max(text: str) -> float | None:
 
 def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
     """--method and --timing: the trajectory's shape and how its segments are timed."""
-    parser.add_argument("--method", choices=METHODS, default="minsnap",
+    parser.add_argument("--method", choices=METHODS.names(), default="minsnap",
                         help="shape of the trajectory: minimum snap, the course reports' "
                              "quintic or cubic, the minimum-jerk quintic-c2, or the quintic "
                              "with average-velocity ends and times length / speed "

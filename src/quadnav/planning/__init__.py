@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from quadnav.planning.problem import PlanningProblem, make_problem
-from quadnav.planning.registry import Progress, get_planner, planner_names
+from quadnav.planning.registry import Progress, get_planner, planner_names, register_planner
 from quadnav.planning.result import PlanResult, PlanStats, PostStep, path_length
 from quadnav.planning.settings import PlannerSettings
 
@@ -29,6 +29,7 @@ __all__ = [
     "path_length",
     "plan",
     "planner_names",
+    "register_planner",
 ]
 
 

@@ -1,11 +1,20 @@
-"""Planners by name: ``rrtstar`` (ours) and ``ompl:NAME`` (the optional OMPL wheel).
+"""Planners by name: ``rrtstar`` (ours), ``ompl:NAME`` (the optional OMPL wheel) and any
+planner registered by :func:`register_planner` or by a package's entry point.
 
 Every planner is a function with the :data:`Planner` signature. It searches
-``problem.free_world`` from ``problem.search_start`` to ``problem.search_goal`` and
-returns a :class:`~quadnav.planning.result.PlanResult` whose path runs from exactly
+``problem.free_world`` (the map with its blocks grown by the margin) from
+``problem.search_start`` to ``problem.search_goal`` and returns a
+:class:`~quadnav.planning.result.PlanResult` whose path runs from exactly
 ``problem.start`` to exactly ``problem.goal`` (:meth:`PlanningProblem.full_path` adds
-the legs out of the margin). To add a planner, write such a function and register it in
-:data:`_OURS`.
+the legs out of the margin). ``examples/custom_planner.py`` is a template.
+
+A planner is known by name in the process that registers it
+(``register_planner("mine", plan_mine)``), so :func:`quadnav.mission.fly_mission` and
+:func:`quadnav.planning.plan` fly it. To make it known to the ``quadnav`` command and to
+batch workers too, a package declares it as an entry point in its ``pyproject.toml``::
+
+    [project.entry-points."quadnav.planners"]
+    mine = "my_package.my_module:plan_mine"
 """
 
 from __future__ import annotations
@@ -17,6 +26,7 @@ from quadnav.errors import QuadnavError
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
 from quadnav.planning.settings import PlannerSettings
+from quadnav.plugins import Registry
 
 #: ``progress(fraction of the budget used in [0, 1], best path length so far or inf)``.
 Progress = Callable[[float, float], None]
@@ -36,12 +46,19 @@ def _rrtstar(problem: PlanningProblem, settings: PlannerSettings,
     return plan_rrtstar(problem, settings, progress)
 
 
-_OURS: dict[str, Planner] = {"rrtstar": _rrtstar}
+#: Planners by name: ours, those registered, those of installed packages' entry points.
+PLANNERS: Registry[Planner] = Registry("planner", "quadnav.planners", {"rrtstar": _rrtstar})
+
+
+def register_planner(name: str, planner: Planner, replace: bool = False) -> None:
+    """Make ``planner`` known as ``name`` in this process, wherever a planner is chosen by
+    name (see :meth:`quadnav.plugins.Registry.register`)."""
+    PLANNERS.register(name, planner, replace)
 
 
 def planner_names() -> list[str]:
     """Every planner name ``get_planner`` accepts (OMPL's whether installed or not)."""
-    return [*_OURS, *(OMPL_PREFIX + name for name in OMPL_PLANNERS)]
+    return [*PLANNERS.names(), *(OMPL_PREFIX + name for name in OMPL_PLANNERS)]
 
 
 def ompl_available() -> bool:
@@ -51,8 +68,8 @@ def ompl_available() -> bool:
 
 def get_planner(name: str) -> Planner:
     """The planner called ``name``; QuadnavError naming the choices if there is none."""
-    if name in _OURS:
-        return _OURS[name]
+    if name in PLANNERS:
+        return PLANNERS.get(name)
     if name.startswith(OMPL_PREFIX) and name[len(OMPL_PREFIX):] in OMPL_PLANNERS:
         if not ompl_available():
             raise QuadnavError(f"planner {name!r} needs the optional OMPL wheel: "

@@ -27,6 +27,7 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED, Range
 from quadnav.planning.result import distinct
+from quadnav.plugins import Registry
 from quadnav.trajectory.collision import refine_until_free
 from quadnav.trajectory.corridor import safe_corridors
 from quadnav.trajectory.cubic import cubic_spline
@@ -48,8 +49,22 @@ from quadnav.world.model import World
 
 #: ``generator(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
 Generator = Callable[[FloatArray, FloatArray], Trajectory]
-#: Methods by name, in the order the command line lists them.
-METHODS = ("minsnap", "quintic", "quintic-c2", "cubic", "quintic-average")
+#: ``method(waypoints (N, 3) m, segment times (N - 1,) s, settings) -> Trajectory``: a
+#: shape through every waypoint at the given times, at rest at both ends (the settings
+#: give the limits, e.g. the quintic's cruise speed). ``examples/custom_trajectory.py``
+#: is a template.
+Method = Callable[[FloatArray, FloatArray, "TrajectorySettings"], Trajectory]
+#: Trajectory methods by name, in the order the command line lists them: the built-in
+#: ones, then those registered (``METHODS.register(name, method)``) or declared by an
+#: installed package's ``quadnav.trajectory_methods`` entry point.
+METHODS: Registry[Method] = Registry("trajectory method", "quadnav.trajectory_methods", {
+    "minsnap": lambda waypoints, times, settings: minimum_snap(waypoints, times),
+    "quintic": lambda waypoints, times, settings: quintic_segments(waypoints, times,
+                                                                   settings.v_max),
+    "quintic-c2": lambda waypoints, times, settings: quintic_c2(waypoints, times),
+    "cubic": lambda waypoints, times, settings: cubic_spline(waypoints, times),
+    "quintic-average": lambda waypoints, times, settings: quintic_average(waypoints, times),
+})
 #: Timings by name: near time-optimal along the curve (:mod:`quadnav.trajectory.retime`),
 #: each segment a rest-to-rest trapezoid then all stretched alike, or minimum snap plus
 #: a weight times the total time (``minsnap`` only). ``quintic-average`` has its own.
@@ -111,7 +126,8 @@ class TrajectorySettings:
         _ROUNDS.check(self.max_rounds, "max rounds")
         checks = [
             (self.method in METHODS,
-             f"unknown trajectory method {self.method!r}; expected one of {', '.join(METHODS)}"),
+             f"unknown trajectory method {self.method!r}; expected one of "
+             f"{', '.join(METHODS.names())}"),
             (self.timing in TIMINGS,
              f"unknown timing {self.timing!r}; expected one of {', '.join(TIMINGS)}"),
             (not (self.corridor or self.timing == "snap-time") or self.method == "minsnap",
@@ -129,16 +145,9 @@ class TrajectorySettings:
 
 
 def _generator(settings: TrajectorySettings, free_world: World | None) -> Generator:
-    if settings.method == "quintic":
-        return lambda w, t: quintic_segments(w, t, settings.v_max)
-    if settings.method == "quintic-c2":
-        return quintic_c2
-    if settings.method == "quintic-average":
-        return quintic_average
-    if settings.method == "cubic":
-        return cubic_spline
     if not settings.corridor:
-        return minimum_snap
+        method = METHODS.get(settings.method)
+        return lambda waypoints, times: method(waypoints, times, settings)
     if free_world is None:
         raise QuadnavError("corridors need a map to keep the trajectory in")
 

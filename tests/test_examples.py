@@ -1,0 +1,63 @@
+"""Every script in examples/ runs as documented and prints what it says: a planner, a
+trajectory method and a reference of one's own, each in one file outside the package,
+fly (the planner on a course map when ../shared/maps is there)."""
+
+from __future__ import annotations
+
+import runpy
+import sys
+from pathlib import Path
+
+import pytest
+
+from quadnav.planning.registry import PLANNERS
+from quadnav.trajectory.generate import METHODS
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.fixture
+def run_example(capsys, monkeypatch):
+    """``run(name, *args) -> stdout`` of ``python examples/name args``, in this process;
+    the names an example registers are forgotten afterwards."""
+    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS)]
+
+    def run(name: str, *args: str) -> str:
+        monkeypatch.setattr(sys, "argv", [str(EXAMPLES / name), *args])
+        runpy.run_path(str(EXAMPLES / name), run_name="__main__")
+        return capsys.readouterr().out
+
+    yield run
+    for registry, plugins in registries:
+        registry._plugins = plugins
+
+
+def test_every_example_is_tested():
+    tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
+              "custom_reference.py", "batch_study.py"}
+    assert {path.name for path in EXAMPLES.glob("*.py")} == tested
+
+
+def test_plan_and_fly(run_example):
+    assert run_example("plan.py").startswith("solved: ")
+    assert run_example("fly.py").startswith("success True")
+
+
+def test_a_planner_of_ones_own_flies_a_course_map(run_example, shared_maps):
+    out = run_example("custom_planner.py", str(shared_maps / "rbe595/map1.txt"))
+    assert out.startswith("map1.txt by PRM: success True"), out
+
+
+def test_a_trajectory_method_of_ones_own_flies(run_example):
+    out = run_example("custom_trajectory.py", "window")
+    assert out.startswith("minimum jerk: success True"), out
+
+
+def test_a_reference_of_ones_own_is_tracked(run_example):
+    out = run_example("custom_reference.py")
+    assert out.startswith("rose: success True"), out
+
+
+def test_a_batch_study(run_example, tmp_path):
+    lines = run_example("batch_study.py", str(tmp_path / "study")).splitlines()
+    assert len(lines) == 4 and all(" 4 of 4, interval 51 to 100 %" in line for line in lines)
