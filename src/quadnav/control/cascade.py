@@ -33,6 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from quadnav.control.contract import SATURATED, Controller
 from quadnav.control.gains import Gains
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import VehicleArrays
@@ -41,17 +42,17 @@ from quadnav.vehicle.rotors import mix
 #: Reference row layout (11,): position (3) m, velocity (3) m/s, acceleration (3) m/s^2,
 #: yaw rad, yaw rate rad/s.
 REFERENCE_SIZE = 11
-# Memory layout.
-_POSITION_INTEGRAL = 0
-_VELOCITY_INTEGRAL = 3
-_RATE_INTEGRAL = 6
-_POSITION_ERROR_RATE = 9
-_ACCELERATION = 12
-_ANGULAR_ACCELERATION = 15
-_PREVIOUS_POSITION_ERROR = 18
-_PREVIOUS_VELOCITY = 21
-_PREVIOUS_RATES = 24
-MIXER_SATURATED = 27
+# Memory layout (slot 0 is the contract's: whether the mixer clipped the commands).
+MIXER_SATURATED = SATURATED
+_POSITION_INTEGRAL = 1
+_VELOCITY_INTEGRAL = 4
+_RATE_INTEGRAL = 7
+_POSITION_ERROR_RATE = 10
+_ACCELERATION = 13
+_ANGULAR_ACCELERATION = 16
+_PREVIOUS_POSITION_ERROR = 19
+_PREVIOUS_VELOCITY = 22
+_PREVIOUS_RATES = 25
 _STARTED = 28
 MEMORY_SIZE = 29
 
@@ -83,6 +84,12 @@ def gain_arrays(gains: Gains) -> GainArrays:
         limits.acceleration_xy, math.radians(limits.tilt_max_deg),
         np.array([limits.thrust_min, limits.thrust_max]), np.radians(limits.rate_max_deg),
         limits.derivative_cutoff_hz)
+
+
+def cascade_controller(gains: Gains | None = None) -> Controller:
+    """The cascade with ``gains`` (default: :class:`~quadnav.control.gains.Gains`) as a
+    :class:`~quadnav.control.contract.Controller`."""
+    return Controller("cascade", control, gain_arrays(gains or Gains()), MEMORY_SIZE)
 
 
 def new_memory() -> np.ndarray:

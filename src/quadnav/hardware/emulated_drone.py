@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.control.cascade import gain_arrays, new_memory
+from quadnav.control.cascade import cascade_controller
 from quadnav.control.gains import Gains
 from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
@@ -257,7 +257,7 @@ class EmulatedDrone:
         self.params = params or load_params()
         self.settings = settings or SimSettings()
         self._vehicle = vehicle_arrays(self.params)
-        self._gains = gain_arrays(gains or Gains())
+        self._controller = cascade_controller(gains)
         self._dt = 1.0 / self.settings.control_rate
         self._grid = body_grid(World(np.array([-1.0, -1, -1, 1, 1, 1])), self._vehicle.half_size)
         self.start = np.asarray(start, dtype=np.float64).reshape(3)
@@ -273,7 +273,7 @@ class EmulatedDrone:
         self.falling = False
         self._motion_began = 0.0
         self._state = self._resting(self.start, yaw)
-        self._memory = new_memory()
+        self._memory = self._controller.new_memory()
         self._setpoint = (self.start.copy(), np.zeros(3), float(yaw))
         self._sticks = (np.zeros(3), 0.0)
         self._acceleration = np.zeros(3)
@@ -312,7 +312,7 @@ class EmulatedDrone:
     def takeoff(self) -> None:
         """Start the motors and climb :data:`TAKEOFF_HEIGHT` (the drone must be landed)."""
         self.flying = True
-        self._memory = new_memory()
+        self._memory = self._controller.new_memory()
         p = self.position
         self._set_setpoint(p, np.zeros(3), self.yaw)
         self._begin(Line(p, p + np.array([0.0, 0.0, TAKEOFF_HEIGHT])), TAKEOFF_SPEED)
@@ -471,9 +471,10 @@ class EmulatedDrone:
         steps = len(references)
         records = np.zeros((steps, STATE_SIZE))
         stats = np.zeros(loop.STATS_SIZE)
-        code, done = loop.fly_steps(
-            self._state, self._memory, 0, steps, np.ascontiguousarray(references),
-            self._vehicle, self._vehicle, self._gains, self.settings.substeps, self._dt,
+        code, done = loop.run_steps(
+            self._controller, self._state, self._memory, 0, steps,
+            np.ascontiguousarray(references), self._vehicle, self._vehicle,
+            self.settings.substeps, self._dt,
             self.floor, np.zeros((steps, 3)), np.zeros((steps, 12)), False,
             np.array([-np.inf] * 3 + [np.inf] * 3), np.zeros((0, 6)), self._grid, 1,
             records, np.zeros((steps, 4)), stats)

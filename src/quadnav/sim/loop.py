@@ -2,20 +2,25 @@
 
 :func:`fly_steps` runs control steps ``first..last`` in place on the state and the
 controller memory, so a driver can run a flight in chunks (for a progress bar) at no
-cost. Each control step: add the measurement noise; run the cascade; accumulate the
-tracking error; record every ``record_every``-th step; then ``substeps`` RK4 steps, each
-followed by the stop checks (non-finite or upside-down state, centre outside the
-boundary, body box touching a real block).
+cost. Each control step: add the measurement noise; run the controller's step (any
+:class:`~quadnav.control.contract.Controller`, passed in as a compiled function);
+accumulate the tracking error; record every ``record_every``-th step; then ``substeps``
+RK4 steps, each followed by the stop checks (non-finite or upside-down state, centre
+outside the boundary, body box touching a real block). :func:`run_steps` is how Python
+calls it for a controller.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
+import numba
 import numpy as np
 from numba import njit
 
-from quadnav.control.cascade import MIXER_SATURATED, GainArrays, control
+from quadnav.control.contract import SATURATED as STEP_SATURATED
+from quadnav.control.contract import Controller
 from quadnav.sim.collision import touched_block
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import VehicleArrays, rk4_step
@@ -57,9 +62,9 @@ def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
 
 
 @njit(cache=True)
-def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
+def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int,
               references: np.ndarray, v: VehicleArrays, model: VehicleArrays,
-              g: GainArrays, substeps: int,
+              g, substeps: int,
               dt_control: float, floor_z: float, forces: np.ndarray, noise: np.ndarray,
               noisy: bool, boundary: np.ndarray, blocks: np.ndarray, grid,
               record_every: int, record_states: np.ndarray, record_commands: np.ndarray,
@@ -67,6 +72,7 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
     """Run control steps ``first..last - 1``; returns (stop code, steps done).
 
     Args:
+        step: the controller's compiled step (see :mod:`quadnav.control.contract`).
         state: (17,) vehicle state, updated in place.
         memory: controller memory, updated in place.
         first: first control step to run (its index into the per-step tables).
@@ -76,7 +82,7 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
             its dynamics are integrated and its body box checked for contact.
         model: the vehicle as the controller knows it (``v`` itself unless the plant
             differs from the model, e.g. a heavier vehicle than the controller assumes).
-        g: the gains (:func:`~quadnav.control.cascade.gain_arrays`).
+        g: the controller's compiled gains.
         substeps: RK4 steps per control step.
         dt_control: control period, s.
         floor_z: height of the floor, m (-inf: none).
@@ -97,7 +103,7 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
     for k in range(first, last):
         reference = references[min(k, last_reference)]
         seen = _measured(state, noise[k]) if noisy else state
-        commands = control(memory, seen, reference, g, model, dt_control)
+        commands = step(memory, seen, reference, g, model, dt_control)
         error = 0.0
         velocity_error = 0.0
         for a in range(3):
@@ -107,7 +113,7 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
         stats[MAX_ERROR] = max(stats[MAX_ERROR], math.sqrt(error))
         stats[MAX_VELOCITY_ERROR] = max(stats[MAX_VELOCITY_ERROR], math.sqrt(velocity_error))
         stats[STEPS] += 1.0
-        stats[SATURATED] += memory[MIXER_SATURATED]
+        stats[SATURATED] += memory[STEP_SATURATED]
         if k % record_every == 0:
             record_states[k // record_every] = state
             record_commands[k // record_every] = commands
@@ -117,3 +123,22 @@ def fly_steps(state: np.ndarray, memory: np.ndarray, first: int, last: int,
             if code != RUNNING:
                 return code, k + 1 - first
     return RUNNING, last - first
+
+
+def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
+    """:func:`fly_steps` with ``controller``'s step and gains: ``args`` are the arguments
+    after ``step`` with the gains left out, from ``state`` to ``stats`` in order.
+
+    The loop is compiled once per type of gains and kept in numba's cache on disk (the
+    step is passed as a first-class function, so a new controller does not recompile
+    it); then compiling stays off, so a call never compiles a loop for one step alone.
+    """
+    args = (*args[:7], controller.gains, *args[7:])
+    signature = (controller.function_type(args[6]), *(numba.typeof(a) for a in args))
+    if signature not in fly_steps.overloads:
+        fly_steps.disable_compile(False)
+        try:
+            fly_steps.compile(signature)
+        finally:
+            fly_steps.disable_compile(True)
+    return fly_steps(controller.step, *args)

@@ -16,7 +16,8 @@ from collections.abc import Callable
 import numpy as np
 
 from quadnav.arrays import FloatArray
-from quadnav.control.cascade import gain_arrays, new_memory
+from quadnav.control.cascade import cascade_controller
+from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
 from quadnav.sim import loop
@@ -87,14 +88,16 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
              settings: SimSettings | None = None,
              progress: Callable[[float], None] | None = None,
              initial_state: FloatArray | None = None,
-             model: VehicleParams | None = None) -> Flight:
-    """Fly ``trajectory`` from a hover at its start through the cascade and the dynamics.
+             model: VehicleParams | None = None,
+             controller: Controller | None = None) -> Flight:
+    """Fly ``trajectory`` from a hover at its start through a controller and the dynamics.
 
     Args:
         trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
             any other :class:`~quadnav.trajectory.reference.Reference`.
         params: the vehicle that flies, the plant (default: the ``tello`` preset).
-        gains: the controller (default: :class:`~quadnav.control.gains.Gains`).
+        gains: the cascade's gains (default: :class:`~quadnav.control.gains.Gains`), when
+            no ``controller`` is given.
         world: the real (uninflated) map: its blocks are obstacles, its boundary the box
             the centre must stay in (within ``settings.boundary_tolerance``) and its lower
             face the floor. ``None``: open space, no floor.
@@ -105,9 +108,11 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         model: the vehicle as the controller knows it (default: ``params``); a plant
             that differs from it (heavier, weaker rotors, more drag) is flown by a
             controller tuned for ``model`` that does not know the difference.
+        controller: any :class:`~quadnav.control.contract.Controller` (default: the
+            cascade with ``gains``).
     """
     params = params or load_params()
-    gains = gains or Gains()
+    controller = controller or cascade_controller(gains)
     settings = settings or SimSettings()
     began = time.perf_counter()
     dt = 1.0 / settings.control_rate
@@ -116,10 +121,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     forces, noise = _disturbances(settings, steps, dt)
     vehicle = vehicle_arrays(params)
     controller_model = vehicle if model is None else vehicle_arrays(model)
-    gains_compiled = gain_arrays(gains)
     state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
-    memory = new_memory()
+    memory = controller.new_memory()
     if world is None:
         boundary = np.array([-np.inf] * 3 + [np.inf] * 3)
         world_blocks = np.zeros((0, 6))
@@ -141,8 +145,8 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     done, code = 0, loop.RUNNING
     while done < steps and code == loop.RUNNING:
         last = min(done + chunk, steps)
-        code, ran = loop.fly_steps(
-            state, memory, done, last, references, vehicle, controller_model, gains_compiled,
+        code, ran = loop.run_steps(
+            controller, state, memory, done, last, references, vehicle, controller_model,
             settings.substeps, dt, floor_z, forces, noise, settings.noisy, boundary,
             world_blocks, grid, every, record_states, record_commands, stats)
         done += ran

@@ -1,0 +1,67 @@
+"""The controller contract: what the closed loop (:mod:`quadnav.sim.loop`), the Tello
+emulator and any controller agree on, so a new controller flies without editing them.
+
+A controller is one compiled step (a numba ``@njit`` function)::
+
+    step(memory (M,), state (17,), reference (11,), gains, vehicle, dt) -> commands (4,)
+
+- ``memory``: the controller's own float64 array (integrals, filters, previous values),
+  updated in place; slot :data:`SATURATED` is 1.0 after a step whose commands had to be
+  clipped (the loop reports the share of such steps) and 0.0 otherwise.
+- ``state``: the measured vehicle state (:mod:`quadnav.vehicle.dynamics`: position,
+  velocity, quaternion (w, x, y, z), body rates, rotor speeds).
+- ``reference``: the row the loop tracks: position (3) m, velocity (3) m/s,
+  acceleration (3) m/s^2, yaw rad, yaw rate rad/s.
+- ``gains``: the controller's compiled gains, any value numba can pass (an array, a
+  NamedTuple of arrays and floats), of one type.
+- ``vehicle``: the vehicle as the controller knows it
+  (:class:`~quadnav.vehicle.dynamics.VehicleArrays`: mass, inertia, mixer, ...).
+- ``dt``: seconds since the last step; the commands are motor commands in [0, 1].
+
+:class:`Controller` bundles a step with its gains and memory size;
+``examples/custom_controller.py`` is a template, :mod:`quadnav.control.cascade` and
+:mod:`quadnav.control.se3` are the built-in ones (``--controller``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numba import types
+
+from quadnav.arrays import FloatArray
+
+#: The memory slot that says whether the last step's commands were clipped.
+SATURATED = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Controller:
+    """A compiled controller, ready to fly.
+
+    Attributes:
+        name: how it is reported, e.g. ``"cascade"``.
+        step: the compiled step (see the module docstring).
+        gains: its compiled gains, passed to every step.
+        memory_size: length of its memory array (at least 1: slot :data:`SATURATED`).
+    """
+
+    name: str
+    step: Any
+    gains: Any
+    memory_size: int
+
+    def new_memory(self) -> FloatArray:
+        """Fresh memory: every slot 0."""
+        return np.zeros(max(self.memory_size, SATURATED + 1))
+
+    def function_type(self, vehicle: Any) -> types.FunctionType:
+        """The numba type of :attr:`step` for these gains and ``vehicle``: the compiled
+        loop takes the step as a function of this type, so one compiled loop (cached on
+        disk) serves every controller with gains of the same type."""
+        array = types.float64[::1]
+        return types.FunctionType(array(array, array, array, numba.typeof(self.gains),
+                                        numba.typeof(vehicle), types.float64))
