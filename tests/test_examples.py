@@ -1,6 +1,6 @@
 """Every script in examples/ runs as documented and prints what it says: a planner, a
-trajectory method and a reference of one's own, each in one file outside the package,
-fly (the planner on a course map when ../shared/maps is there)."""
+trajectory method, a reference and a controller of one's own, each in one file outside
+the package, fly (the planner and the controller on a course map)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from quadnav.control.registry import CONTROLLERS
 from quadnav.planning.registry import PLANNERS
 from quadnav.trajectory.generate import METHODS
 
@@ -20,7 +21,8 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 def run_example(capsys, monkeypatch):
     """``run(name, *args) -> stdout`` of ``python examples/name args``, in this process;
     the names an example registers are forgotten afterwards."""
-    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS)]
+    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS,
+                                                                   CONTROLLERS)]
 
     def run(name: str, *args: str) -> str:
         monkeypatch.setattr(sys, "argv", [str(EXAMPLES / name), *args])
@@ -34,7 +36,7 @@ def run_example(capsys, monkeypatch):
 
 def test_every_example_is_tested():
     tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
-              "custom_reference.py", "batch_study.py"}
+              "custom_reference.py", "custom_controller.py", "batch_study.py"}
     assert {path.name for path in EXAMPLES.glob("*.py")} == tested
 
 
@@ -61,3 +63,12 @@ def test_a_reference_of_ones_own_is_tracked(run_example):
 def test_a_batch_study(run_example, tmp_path):
     lines = run_example("batch_study.py", str(tmp_path / "study")).splitlines()
     assert len(lines) == 4 and all(" 4 of 4, interval 51 to 100 %" in line for line in lines)
+
+
+def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offset(
+        run_example, shared_maps):
+    lines = run_example("custom_controller.py", str(shared_maps / "rbe595/map1.txt"))
+    plain, integral = (float(line.split("final error ")[1].split(" cm")[0])
+                       for line in lines.splitlines())
+    assert all("success True" in line for line in lines.splitlines()), lines
+    assert integral < 1.0 < plain, lines

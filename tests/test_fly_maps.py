@@ -80,3 +80,20 @@ def test_every_built_in_world_is_flown_to_the_goal_over_twenty_seeds(name, seed)
     spec = name if name == "empty" else f"{name}:seed={seed}"  # the empty world has no seed
     world = load_world(spec)
     _assert_clean_success(_fly(world, world.start, world.goal, world.margin, seed))
+
+
+@pytest.mark.parametrize("name", MAPS)
+def test_every_course_map_is_flown_by_the_se3_controller_at_two_metres_per_second(
+        shared_maps, name):
+    """The second controller, through the same contract and loop (fly --controller se3)."""
+    world, start, goal, margin = course_query(shared_maps, name)
+    settings = MissionSettings(controller="se3",
+                               trajectory=TrajectorySettings(v_max=2.0, a_max=3.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlanningWarning)  # starts inside the margin
+        mission = fly_mission(world, start, goal, margin, settings)
+    _assert_clean_success(mission)
+    metrics = mission.metrics()
+    assert metrics["flight_margin_m"] >= 0.5 * margin, metrics
+    assert mission.flight.rms_tracking_error < 0.05
+    assert mission.parameters()["controller"] == "se3"

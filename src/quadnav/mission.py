@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
+from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
@@ -71,7 +72,9 @@ class MissionSettings:
             (:func:`~quadnav.sim.envelope.vehicle_limits`), lowered until every limit
             holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
-        gains: the controller.
+        gains: the cascade's gains (the PX4-style controller).
+        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
+            ``cascade``, ``se3`` or one registered).
         sim: rates, stopping and success rules, disturbances, seed.
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
@@ -85,8 +88,12 @@ class MissionSettings:
     fastest: bool = False
     vehicle: VehicleParams = field(default_factory=load_params)
     gains: Gains = field(default_factory=Gains)
+    controller: str = DEFAULT_CONTROLLER
     sim: SimSettings = field(default_factory=SimSettings)
     plant: VehicleParams | None = None
+
+    def __post_init__(self) -> None:
+        CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -135,6 +142,7 @@ class Mission:
             "trajectory": as_plain(self.settings.trajectory),
             "vehicle": as_plain(self.settings.vehicle),
             "gains": as_plain(self.settings.gains),
+            "controller": self.settings.controller,
             "simulation": as_plain(self.settings.sim),
         } | plant
 
@@ -277,7 +285,8 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     settings = dataclasses.replace(settings, trajectory=chosen)
     timings["trajectory"] = time.perf_counter() - began
     flight = simulate(trajectory, settings.flown_vehicle, settings.gains, world, settings.sim,
-                      flight_progress, model=settings.vehicle)
+                      flight_progress, model=settings.vehicle,
+                      controller=CONTROLLERS.get(settings.controller)(settings.gains))
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
+from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
 from quadnav.mission import flight_metrics, flight_succeeded
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
@@ -76,9 +77,10 @@ class Tracking:
         world: the empty world it was flown in (:func:`track_world`).
         flight: the flight.
         vehicle: the simulated quadrotor.
-        gains: the controller.
+        gains: the cascade's gains.
         settings: the simulation settings flown with (a step's record rate raised to the
             control rate).
+        controller: the controller's name (``cascade``, ``se3``, ...).
     """
 
     reference: Reference
@@ -87,6 +89,7 @@ class Tracking:
     vehicle: VehicleParams
     gains: Gains
     settings: SimSettings
+    controller: str = DEFAULT_CONTROLLER
 
     @property
     def name(self) -> str:
@@ -108,6 +111,7 @@ class Tracking:
             "boundary": self.world.boundary.tolist(),
             "vehicle": as_plain(self.vehicle),
             "gains": as_plain(self.gains),
+            "controller": self.controller,
             "simulation": as_plain(self.settings),
         }
 
@@ -164,7 +168,8 @@ def step_summary(metrics: dict) -> str:
 
 def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
                     gains: Gains | None = None, settings: SimSettings | None = None,
-                    progress: Callable[[float], None] | None = None) -> Tracking:
+                    progress: Callable[[float], None] | None = None,
+                    controller: str = DEFAULT_CONTROLLER) -> Tracking:
     """Fly ``reference`` in its :func:`track_world` and measure how well it was tracked.
 
     Args:
@@ -175,6 +180,7 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
         settings: rates, settling time, goal tolerance, disturbances, seed; a step is
             recorded at the control rate whatever the record rate.
         progress: called with the fraction of the flight simulated.
+        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`).
 
     Raises:
         QuadnavError: a flight too long for the rates (see
@@ -186,5 +192,6 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
     if isinstance(reference, StepReference) and reference.is_step:
         settings = settings.replace(record_rate=settings.control_rate)
     world = track_world(reference)
-    flight = simulate(reference, vehicle, gains, world, settings, progress)
-    return Tracking(reference, world, flight, vehicle, gains, settings)
+    flight = simulate(reference, vehicle, gains, world, settings, progress,
+                      controller=CONTROLLERS.get(controller)(gains))
+    return Tracking(reference, world, flight, vehicle, gains, settings, controller)

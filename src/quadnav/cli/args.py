@@ -10,6 +10,8 @@ from collections.abc import Callable
 import numpy as np
 
 from quadnav.control.gains import Gains, course_gain_names, load_gains
+from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.errors import QuadnavError
 from quadnav.limits import (
     ACCELERATION,
     COORDINATE,
@@ -203,8 +205,20 @@ def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
                              "the gains tuned for the vehicle")
 
 
+def add_controller_argument(parser: argparse.ArgumentParser) -> None:
+    """--controller NAME."""
+    parser.add_argument("--controller", choices=CONTROLLERS.names(), default=DEFAULT_CONTROLLER,
+                        help="the controller: cascade (PX4-style, tuned by --gains) or se3 "
+                             "(the geometric controller of Lee et al., rotorpy's gains) "
+                             f"(default: {DEFAULT_CONTROLLER})")
+
+
 def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:
     """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here)."""
+    controller = getattr(args, "controller", DEFAULT_CONTROLLER)
+    if args.gains is not None and controller != DEFAULT_CONTROLLER:
+        raise QuadnavError(f"--gains sets the cascade's gains; --controller {controller} "
+                           "flies with its own")
     vehicle = load_params(args.params)
     return vehicle, load_gains(args.gains, vehicle.gains)
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from quadnav.cli.args import (
     acceleration,
+    add_controller_argument,
     add_map_argument,
     add_margin_argument,
     add_planner_arguments,
@@ -25,6 +26,7 @@ from quadnav.cli.args import (
 )
 from quadnav.cli.commands import command_help
 from quadnav.cli.progress import fraction_bar, planning_bar
+from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.limits import ACCELERATION, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
@@ -58,6 +60,7 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
         fastest=args.speed is None,
         vehicle=vehicle,
         gains=gains,
+        controller=args.controller,
         sim=simulation_settings(args),
     )
 
@@ -110,8 +113,10 @@ def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal"
 def print_summary(mission: Mission) -> None:
     """Print the outcome and headline figures of ``mission``, a few lines."""
     m = mission.metrics()
+    controller = mission.settings.controller
+    flown_by = "" if controller == DEFAULT_CONTROLLER else f", controller {controller}"
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
-          f"{m['seed']}, vehicle {m['vehicle']}, top speed {m['speed_m_s']:.3g} m/s")
+          f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, top speed {m['speed_m_s']:.3g} m/s")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
         return
@@ -157,6 +162,7 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
     add_timing_arguments(p)
     add_vehicle_arguments(p)
+    add_controller_argument(p)
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
     add_simulation_arguments(p)
     add_run_output_arguments(p, "flight", REPORT)

@@ -7,6 +7,7 @@ import argparse
 import sys
 
 from quadnav.cli.args import (
+    add_controller_argument,
     add_run_output_arguments,
     add_seed_argument,
     add_simulation_arguments,
@@ -42,7 +43,8 @@ def track(args: argparse.Namespace) -> int:
                            f"not to {args.reference}")
     print(how_read(reference))
     with fraction_bar("fly", args.quiet) as flying:
-        tracking = track_reference(reference, vehicle, gains, settings, flying)
+        tracking = track_reference(reference, vehicle, gains, settings, flying,
+                                   args.controller)
     written = write_run(tracking, folder, figures=not args.no_figures, html=args.html)
     _print_summary(tracking.metrics())
     print("wrote " + ", ".join(str(folder / name) for name in written))
@@ -111,6 +113,7 @@ def add_track_command(subparsers: argparse._SubParsersAction) -> None:
                         f"{1 / COURSE_MP_RATE:g} s; quadnav traj writes one every --dt, 0.01 "
                         "s by default: --rate 100)")
     add_vehicle_arguments(p)
+    add_controller_argument(p)
     add_seed_argument(p, "seed of the gusts")
     add_simulation_arguments(p)
     add_run_output_arguments(p, "track", REPORT)

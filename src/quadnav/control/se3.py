@@ -1,0 +1,98 @@
+"""The geometric controller on SE(3) of Lee, Leok and McClamroch (2010), compiled with
+numba: the one MEAM620 and rotorpy use, as a second :class:`~quadnav.control.contract.Controller`
+(``fly --controller se3``).
+
+One step:
+
+1. **Force**: ``F = m (-kx ex - kv ev + a_ref) + m g e3`` plus the drag the vehicle meets
+   at the reference velocity (as the cascade), with ``ex``, ``ev`` the position and
+   velocity errors and gains per axis in 1/s^2 and 1/s (so they do not depend on the
+   mass); the collective thrust is ``F`` along the current body z.
+2. **Attitude**: the desired body z is along ``F``, the desired heading the reference's
+   yaw; ``eR = vee(Rd^T R - R^T Rd) / 2`` and ``ew = w - R^T Rd w_d`` (``w_d``: the yaw
+   rate about world z); torque ``J (-kR eR - kw ew) + w x J w`` (gains in 1/s^2 and 1/s).
+3. **Mixer**: :func:`quadnav.vehicle.rotors.mix`, roll and pitch first when the rotors
+   cannot make the wrench; motor commands in [0, 1].
+
+It has no integral terms, so a steady force it does not model (wind) leaves an offset.
+The default gains are rotorpy's for the Crazyflie, which in these units suit any small
+quadrotor whose motors respond within a few hundredths of a second.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from quadnav.control.contract import SATURATED, Controller
+from quadnav.vehicle import quaternion
+from quadnav.vehicle.dynamics import VehicleArrays
+from quadnav.vehicle.rotors import mix
+
+#: Memory: only the contract's saturation flag.
+MEMORY_SIZE = 1
+
+
+class SE3Gains(NamedTuple):
+    """Gains per axis (3,): position 1/s^2, velocity 1/s, attitude 1/s^2, rate 1/s."""
+
+    kx: np.ndarray
+    kv: np.ndarray
+    kr: np.ndarray
+    kw: np.ndarray
+
+
+def se3_gains(kx=(6.5, 6.5, 15.0), kv=(4.0, 4.0, 9.0), kr=(544.0, 544.0, 100.0),
+              kw=(46.64, 46.64, 20.0)) -> SE3Gains:
+    """The gains as compiled code takes them (defaults: rotorpy's ``SE3Control``, with a
+    gentler yaw)."""
+    return SE3Gains(*(np.array(k, dtype=np.float64) for k in (kx, kv, kr, kw)))
+
+
+def se3_controller(gains: SE3Gains | None = None) -> Controller:
+    """The geometric controller as a :class:`~quadnav.control.contract.Controller`."""
+    return Controller("se3", se3_step, gains or se3_gains(), MEMORY_SIZE)
+
+
+@njit(cache=True)
+def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE3Gains,
+             v: VehicleArrays, dt: float) -> np.ndarray:
+    """Motor commands (4,) in [0, 1] for the measured ``state`` (17,) tracking
+    ``reference`` (11,); see the module docstring."""
+    r = quaternion.to_matrix(state[6:10])
+    force = np.empty(3)
+    for a in range(3):
+        force[a] = v.mass * (-g.kx[a] * (state[a] - reference[a])
+                             - g.kv[a] * (state[3 + a] - reference[3 + a]) + reference[6 + a])
+    force[2] += v.mass * v.gravity
+    for b in range(3):  # the drag at the reference velocity, body axes, as feed-forward
+        drag = v.drag[b] * (r[0, b] * reference[3] + r[1, b] * reference[4]
+                            + r[2, b] * reference[5])
+        for a in range(3):
+            force[a] += r[a, b] * drag
+    collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
+
+    b3 = force / math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2)
+    heading = np.array([math.cos(reference[9]), math.sin(reference[9]), 0.0])
+    b2 = np.cross(b3, heading)
+    b2 /= math.sqrt(b2[0] ** 2 + b2[1] ** 2 + b2[2] ** 2)
+    rd = np.empty((3, 3))
+    rd[:, 0], rd[:, 1], rd[:, 2] = np.cross(b2, b3), b2, b3
+    error = 0.5 * (rd.T @ r - r.T @ rd)
+    e_r = np.array([error[2, 1], error[0, 2], error[1, 0]])
+    w_d = r.T @ np.array([0.0, 0.0, reference[10]])  # the yaw rate, in body axes
+    torque = np.empty(3)
+    w = state[10:13]
+    for b in range(3):
+        torque[b] = v.inertia[b] * (-g.kr[b] * e_r[b] - g.kw[b] * (w[b] - w_d[b]))
+    torque[0] += w[1] * v.inertia[2] * w[2] - w[2] * v.inertia[1] * w[1]
+    torque[1] += w[2] * v.inertia[0] * w[0] - w[0] * v.inertia[2] * w[2]
+    torque[2] += w[0] * v.inertia[1] * w[1] - w[1] * v.inertia[0] * w[0]
+
+    wrench = np.array([collective, torque[0], torque[1], torque[2]])
+    thrusts, changed = mix(wrench, v.mixer, v.max_rotor_thrust)
+    memory[SATURATED] = 1.0 if changed else 0.0
+    return thrusts / v.max_rotor_thrust
