@@ -7,12 +7,11 @@ vehicle, dt) -> motor commands (4,)`` (see :mod:`quadnav.control.contract`): ``m
 its own array, slot 0 saying whether the commands were clipped. Use this file as a
 template.
 
-Run: python examples/custom_controller.py [MAP]   (default: ../shared/maps/rbe595/map1.txt
-beside the checkout if there, else the built-in forest)
+Run: python examples/custom_controller.py [MAP]   (a map with its own start and goal, such as
+../shared/maps/meam620/test_window.json; default: the built-in forest)
 """
 
 import sys
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -55,15 +54,11 @@ def se3_integral(gains=None) -> Controller:
 CONTROLLERS.register("se3i", se3_integral)
 
 if __name__ == "__main__":
-    course_map = Path(__file__).resolve().parents[2] / "shared/maps/rbe595/map1.txt"
-    name = sys.argv[1] if len(sys.argv) > 1 else str(course_map) if course_map.exists() \
-        else "forest"
-    world = load_world(name)
-    start, goal = (None, None) if world.start is not None else ((0.5, -4.5, 0.5), (8, 18, 3))
+    name = sys.argv[1] if len(sys.argv) > 1 else "forest"
+    world = load_world(name)  # flown from its own start to its own goal
     wind = SimSettings(wind=(0.05, 0.0, 0.0))  # N: a steady breeze along x
     for controller in ("se3", "se3i"):
-        mission = fly_mission(world, start, goal,
-                              settings=MissionSettings(controller=controller, sim=wind))
+        mission = fly_mission(world, settings=MissionSettings(controller=controller, sim=wind))
         metrics = mission.metrics()
         print(f"{controller} in wind: success {metrics['success']}, RMS tracking error "
               f"{100 * metrics['rms_tracking_error_m']:.2f} cm, final error "

@@ -6,8 +6,8 @@ searches ``problem.free_world`` (the map with its blocks grown by the margin) fr
 ``problem.search_start`` to ``problem.search_goal``; ``problem.full_path`` adds the
 short legs out of the margin. Use this file as a template.
 
-Run: python examples/custom_planner.py [MAP]   (default: ../shared/maps/rbe595/map1.txt
-beside the checkout if there, else the built-in forest)
+Run: python examples/custom_planner.py [MAP]   (a map with its own start and goal, such as
+../shared/maps/meam620/test_window.json; default: the built-in forest)
 """
 
 import sys
@@ -56,12 +56,9 @@ def plan_prm(problem, settings, progress=None) -> PlanResult:
 register_planner("prm", plan_prm)
 
 if __name__ == "__main__":
-    course_map = Path(__file__).resolve().parents[2] / "shared/maps/rbe595/map1.txt"
-    name = sys.argv[1] if len(sys.argv) > 1 else str(course_map) if course_map.exists() \
-        else "forest"
-    world = load_world(name)
-    start, goal = (None, None) if world.start is not None else ((0.5, -4.5, 0.5), (8, 18, 3))
-    mission = fly_mission(world, start, goal, settings=MissionSettings(planner="prm"))
+    name = sys.argv[1] if len(sys.argv) > 1 else "forest"
+    world = load_world(name)  # flown from its own start to its own goal
+    mission = fly_mission(world, settings=MissionSettings(planner="prm"))
     metrics = mission.metrics()
     print(f"{Path(name).name} by PRM: success {metrics['success']}, path "
           f"{metrics['path_length_m']:.2f} m, flight {metrics['flight_time_s']:.1f} s, "

@@ -46,8 +46,8 @@ def test_plan_and_fly(run_example):
 
 
 def test_a_planner_of_ones_own_flies_a_course_map(run_example, shared_maps):
-    out = run_example("custom_planner.py", str(shared_maps / "rbe595/map1.txt"))
-    assert out.startswith("map1.txt by PRM: success True"), out
+    out = run_example("custom_planner.py", str(shared_maps / "meam620/test_window.json"))
+    assert out.startswith("test_window.json by PRM: success True"), out
 
 
 def test_a_trajectory_method_of_ones_own_flies(run_example):
@@ -67,7 +67,7 @@ def test_a_batch_study(run_example, tmp_path):
 
 def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offset(
         run_example, shared_maps):
-    lines = run_example("custom_controller.py", str(shared_maps / "rbe595/map1.txt"))
+    lines = run_example("custom_controller.py", str(shared_maps / "meam620/test_window.json"))
     plain, integral = (float(line.split("final error ")[1].split(" cm")[0])
                        for line in lines.splitlines())
     assert all("success True" in line for line in lines.splitlines()), lines

@@ -52,6 +52,7 @@ from typing import TextIO
 import numpy as np
 
 from quadnav.arrays import FloatArray
+from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.hardware.dead_reckoning import DeadReckoning
 from quadnav.hardware.drone_clock import Clock, VirtualClock
@@ -170,9 +171,7 @@ class BridgeSettings:
             (self.link_timeout > 0, f"link timeout {self.link_timeout:g}: expected > 0 s"),
             (self.time_scale > 0, f"time scale {self.time_scale:g}: expected > 0"),
         ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        require(checks)
 
 
 class RcModeError(QuadnavError):

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from quadnav.arrays import FloatArray
+from quadnav.config import require
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
@@ -88,9 +89,7 @@ class DiffDrive:
             (self.omega_max > 0, f"turn rate limit must be > 0 rad/s, got {self.omega_max}"),
             (self.radius >= 0, f"robot radius must be >= 0 m, got {self.radius}"),
         ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        require(checks)
 
     def sample_controls(self, rng: np.random.Generator, n: int) -> FloatArray:
         """``n`` controls (n, 2) ``(v, omega)`` drawn uniformly within the limits."""

@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.errors import QuadnavError
+from quadnav.config import require
 
 
 @dataclass(frozen=True)
@@ -96,9 +96,7 @@ class SampledQuadrotor:
             (self.speed_limit is None or _positive(self.speed_limit),
              f"speed limit must be > 0 m/s, got {self.speed_limit}"),
         ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        require(checks)
 
     @property
     def hover_thrust(self) -> float:

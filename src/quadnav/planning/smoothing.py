@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from quadnav.arrays import FloatArray
-from quadnav.errors import QuadnavError
+from quadnav.config import require
 from quadnav.planning.result import IntArray, path_length
 from quadnav.planning.shortcut import free_polyline, polyline_segments
 from quadnav.world.model import World
@@ -124,9 +124,7 @@ def _check_arguments(weight_data: float, weight_smooth: float, tolerance: float,
          f"max_spacing must be a positive number of metres, got {max_spacing}"),
         (max_sweeps >= 1, f"max_sweeps must be >= 1, got {max_sweeps}"),
     ]
-    for ok, message in checks:
-        if not ok:
-            raise QuadnavError(message)
+    require(checks)
 
 
 def _densify(world: World, points: FloatArray, spacing: float) -> FloatArray:

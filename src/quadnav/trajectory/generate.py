@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
 from quadnav.arrays import FloatArray
+from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED, Range
 from quadnav.planning.result import distinct
@@ -135,9 +136,7 @@ class TrajectorySettings:
             (math.isfinite(self.time_weight) and self.time_weight > 0,
              f"time weight must be > 0, got {self.time_weight}"),
         ]
-        for ok, message in checks:
-            if not ok:
-                raise QuadnavError(message)
+        require(checks)
 
     def replace(self, **changes: object) -> TrajectorySettings:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""
