@@ -45,6 +45,7 @@ def test_plan_and_fly(run_example):
     assert run_example("fly.py").startswith("success True")
 
 
+@pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
 def test_a_planner_of_ones_own_flies_a_course_map(run_example, shared_maps):
     out = run_example("custom_planner.py", str(shared_maps / "meam620/test_window.json"))
     assert out.startswith("test_window.json by PRM: success True"), out
@@ -65,6 +66,7 @@ def test_a_batch_study(run_example, tmp_path):
     assert len(lines) == 4 and all(" 4 of 4, interval 51 to 100 %" in line for line in lines)
 
 
+@pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
 def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offset(
         run_example, shared_maps):
     lines = run_example("custom_controller.py", str(shared_maps / "meam620/test_window.json"))
