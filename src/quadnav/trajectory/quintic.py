@@ -6,8 +6,14 @@ both ends (quintic Hermite interpolation).
 * :func:`quintic_average` — another report's method: at each interior waypoint the
   average of the two segments' average velocities (length over time, along the segment),
   zero acceleration; at rest at both ends.
-* :func:`quintic_c2` — interior velocities and accelerations solved so that jerk and snap
-  are continuous too: the minimum-jerk spline (C4), from one block-tridiagonal system.
+* :func:`quintic_c2` — interior velocities and accelerations such that jerk and snap are
+  continuous too: the minimum-jerk spline (C4), which
+  :func:`~quadnav.trajectory.minsnap.minimum_derivative` solves with ``derivative=3``.
+
+The Hermite pieces are written here rather than by scipy's ``BPoly.from_derivatives``:
+that one agrees to 1e-12 but not exactly at the waypoints (its Bernstein coefficients
+differ by round-off there), and a ``trajectory.csv`` or ``MP.csv`` read back must give
+the written samples exactly.
 
 Segment ``i`` of ``T_i`` s is written in the normalised time ``tau = (t - t_i) / T_i``;
 a velocity enters its end conditions times ``T_i`` and an acceleration times ``T_i^2``.
@@ -19,10 +25,10 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import solve_banded
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
+from quadnav.trajectory.minsnap import minimum_derivative
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polybasis import check_waypoints_and_times, derivative_rows, make_trajectory
 from quadnav.trajectory.timing import segment_lengths
@@ -30,9 +36,6 @@ from quadnav.trajectory.timing import segment_lengths
 #: Coefficients in tau (6,) from the end conditions ``[p0, v0, a0, p1, v1, a1]`` (tau units).
 _HERMITE = np.linalg.inv(np.vstack([derivative_rows(6, order, tau)
                                     for tau in (0.0, 1.0) for order in range(3)]))
-#: Jerk and snap in tau at tau = 0 and tau = 1 (rows), from the end conditions (columns).
-_JERK_SNAP = np.vstack([derivative_rows(6, order, tau)
-                        for tau in (0.0, 1.0) for order in (3, 4)]) @ _HERMITE
 
 
 def hermite_trajectory(states: FloatArray, durations: FloatArray, method: str, info: dict
@@ -116,12 +119,8 @@ def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
 
 def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     """Quintic segments through ``waypoints`` with continuous velocity, acceleration, jerk
-    and snap: the minimum-jerk spline, at rest (zero velocity and acceleration) at both ends.
-
-    The unknown velocities and accelerations of the interior waypoints solve the 2 x 2
-    block-tridiagonal system "jerk and snap at the end of segment ``i - 1`` equal those at
-    the start of segment ``i``" (the optimality conditions of the minimum-jerk problem),
-    with :func:`scipy.linalg.solve_banded` (three axes as three right-hand sides).
+    and snap: the minimum-jerk spline, at rest (zero velocity and acceleration) at both ends
+    (:func:`~quadnav.trajectory.minsnap.minimum_derivative` with ``derivative=3``).
 
     Args:
         waypoints: (N, 3) points, metres, N >= 2, no two consecutive ones equal.
@@ -135,37 +134,4 @@ def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     """
     points, durations = check_waypoints_and_times(waypoints, times)
     segment_lengths(points)
-    states = np.zeros((len(points), 3, 3))
-    states[:, 0] = points
-    interior = len(points) - 2
-    if interior:
-        velocity_acceleration = _solve_interior(points, durations)  # (interior, 2, 3)
-        states[1:-1, 1:] = velocity_acceleration
-    return hermite_trajectory(states, durations, "quintic-c2", {})
-
-
-def _solve_interior(points: FloatArray, durations: FloatArray) -> FloatArray:
-    """Velocity and acceleration (N - 2, 2, 3) at the interior waypoints that make jerk and
-    snap continuous there, the end waypoints being at rest."""
-    # Jerk and snap (rows) of each segment at both ends, in s-units, from the end
-    # conditions [p0, v0, a0, p1, v1, a1] in m, m/s, m/s^2 (columns).
-    row_scale = durations[:, None] ** -np.array([3, 4, 3, 4])
-    column_scale = durations[:, None] ** np.array([0, 1, 2, 0, 1, 2])
-    jerk_snap = row_scale[:, :, None] * _JERK_SNAP * column_scale[:, None, :]
-    arriving, leaving = jerk_snap[:-1, 2:], jerk_snap[1:, :2]  # (interior, 2, 6) each
-    blocks = {-1: arriving[:, :, 1:3],
-              0: arriving[:, :, 4:6] - leaving[:, :, 1:3],
-              1: -leaving[:, :, 4:6]}
-    rhs = -(arriving[:, :, 0, None] * points[:-2, None]
-            + (arriving[:, :, 3] - leaving[:, :, 0])[:, :, None] * points[1:-1, None]
-            - leaving[:, :, 3, None] * points[2:, None])  # (interior, 2, 3)
-    n = len(rhs)
-    banded = np.zeros((7, 2 * n))  # 3 bands above and 3 below the diagonal
-    r, c = np.meshgrid(range(2), range(2), indexing="ij")
-    for shift, block in blocks.items():
-        k = np.arange(max(0, -shift), min(n, n - shift))
-        rows = 2 * k[:, None, None] + r
-        cols = 2 * (k + shift)[:, None, None] + c
-        banded[3 + rows - cols, cols] = block[k]
-    solution = solve_banded((3, 3), banded, rhs.reshape(2 * n, 3))
-    return solution.reshape(n, 2, 3)
+    return minimum_derivative(points, durations, 3).replace(method="quintic-c2", info={})
