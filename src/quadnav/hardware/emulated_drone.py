@@ -38,12 +38,10 @@ from quadnav.control.cascade import cascade_controller
 from quadnav.control.gains import Gains
 from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
-from quadnav.sim.collision import body_grid
 from quadnav.sim.settings import SimSettings
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, rk4_step, vehicle_arrays
+from quadnav.vehicle.dynamics import hover_state, rk4_step, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams, load_params
-from quadnav.world.model import World
 
 #: Height of the hover after ``takeoff`` above the floor, m (the SDK's "about 80 cm").
 TAKEOFF_HEIGHT = 0.8
@@ -259,9 +257,9 @@ class EmulatedDrone:
         self._vehicle = vehicle_arrays(self.params)
         self._controller = cascade_controller(gains)
         self._dt = 1.0 / self.settings.control_rate
-        self._grid = body_grid(World(np.array([-1.0, -1, -1, 1, 1, 1])), self._vehicle.half_size)
         self.start = np.asarray(start, dtype=np.float64).reshape(3)
         self.floor = float(self.start[2])
+        self._scene = loop.scene(None, self._vehicle.half_size, floor_z=self.floor)
         self.initial_yaw = float(yaw)
         self.battery = float(battery)
         self.battery_drain = float(battery_drain)
@@ -469,15 +467,12 @@ class EmulatedDrone:
         """Run the closed loop through ``references`` (K, 11); positions (K, 3) before
         each step."""
         steps = len(references)
-        records = np.zeros((steps, STATE_SIZE))
-        stats = np.zeros(loop.STATS_SIZE)
+        record = loop.new_record(steps)
         code, done = loop.run_steps(
             self._controller, self._state, self._memory, 0, steps,
             np.ascontiguousarray(references), self._vehicle, self._vehicle,
-            self.settings.substeps, self._dt,
-            self.floor, np.zeros((steps, 3)), np.zeros((steps, 12)), False,
-            np.array([-np.inf] * 3 + [np.inf] * 3), np.zeros((0, 6)), self._grid, 1,
-            records, np.zeros((steps, 4)), stats)
+            self.settings.substeps, self._dt, self._scene, loop.still_air(steps), record)
+        records = record.states
         if code != loop.RUNNING:  # diverged (e.g. tipped over): it crashes to the floor
             self.motion, self.landing, self.flying = None, False, False
             records[done:] = self._resting(records[done - 1], self.yaw)

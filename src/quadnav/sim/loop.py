@@ -13,7 +13,7 @@ calls it for a controller.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -21,15 +21,70 @@ from numba import njit
 
 from quadnav.control.contract import SATURATED as STEP_SATURATED
 from quadnav.control.contract import Controller
-from quadnav.sim.collision import touched_block
+from quadnav.sim.collision import body_grid, touched_block
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import VehicleArrays, rk4_step
+from quadnav.vehicle.dynamics import STATE_SIZE, VehicleArrays, rk4_step
+from quadnav.world.blockgrid import GridArrays
+from quadnav.world.model import World
 
 #: Stop codes returned by :func:`fly_steps` (see :class:`~quadnav.sim.flight.Ending`).
 RUNNING, COLLISION, LEFT_BOUNDARY, DIVERGED = 0, 1, 2, 3
 #: Layout of the statistics array (:data:`STATS_SIZE`,).
 SUM_SQUARED_ERROR, MAX_ERROR, MAX_VELOCITY_ERROR, STEPS, SATURATED, CONTACT_BLOCK = range(6)
 STATS_SIZE = 6
+
+
+class Scene(NamedTuple):
+    """Where the vehicle flies, as compiled code takes it (:func:`scene`)."""
+
+    boundary: np.ndarray  # (6,) the box the centre must stay in, m
+    blocks: np.ndarray  # (N, 6) real blocks, m
+    grid: GridArrays  # :func:`~quadnav.sim.collision.body_grid` of the blocks
+    floor_z: float  # height of the floor, m (-inf: none)
+
+
+class Disturbances(NamedTuple):
+    """What acts on the flight besides the controller, per control step."""
+
+    forces: np.ndarray  # (K, 3) external force, N
+    noise: np.ndarray  # (K, 12) measurement noise (see _measured)
+    noisy: bool  # whether to add the noise (skipped when all zero)
+
+
+class Record(NamedTuple):
+    """Where the loop writes what happened."""
+
+    every: int  # control steps per recorded row
+    states: np.ndarray  # (R, 17): row k // every written at control steps k divisible by every
+    commands: np.ndarray  # (R, 4) motor commands, likewise
+    stats: np.ndarray  # (STATS_SIZE,) running tracking statistics
+
+
+def scene(world: World | None, half_size: np.ndarray, tolerance: float = 0.0,
+          floor_z: float | None = None) -> Scene:
+    """The scene of ``world`` for a body of half sizes ``half_size`` (3,) m: its boundary
+    widened by ``tolerance`` m, its blocks and their grid, its floor (its lower face, or
+    ``floor_z``). ``None``: open space without blocks, with no floor unless ``floor_z``."""
+    if world is None:
+        grid = body_grid(World(np.array([-1.0, -1, -1, 1, 1, 1])), half_size)
+        return Scene(np.array([-np.inf] * 3 + [np.inf] * 3), np.zeros((0, 6)), grid,
+                     -np.inf if floor_z is None else float(floor_z))
+    boundary = world.boundary + np.repeat([-1.0, 1.0], 3) * tolerance
+    return Scene(boundary, np.array(world.blocks), body_grid(world, half_size),
+                 float(world.lower[2]) if floor_z is None else float(floor_z))
+
+
+def still_air(steps: int) -> Disturbances:
+    """No force and no sensor noise over ``steps`` control steps."""
+    return Disturbances(np.zeros((steps, 3)), np.zeros((steps, 12)), False)
+
+
+def new_record(steps: int, every: int = 1) -> Record:
+    """Empty records for ``steps`` control steps, a row every ``every``."""
+    rows = (steps + every - 1) // every
+    stats = np.zeros(STATS_SIZE)
+    stats[CONTACT_BLOCK] = -1
+    return Record(every, np.zeros((rows, STATE_SIZE)), np.zeros((rows, 4)), stats)
 
 
 @njit(cache=True)
@@ -44,7 +99,7 @@ def _measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
+def _stop_code(state, v: VehicleArrays, where: Scene, stats) -> int:
     for value in state:
         if not math.isfinite(value):
             return DIVERGED
@@ -52,9 +107,9 @@ def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
     if r[2, 2] < 0.0:
         return DIVERGED
     for a in range(3):
-        if not boundary[a] <= state[a] <= boundary[a + 3]:
+        if not where.boundary[a] <= state[a] <= where.boundary[a + 3]:
             return LEFT_BOUNDARY
-    block = touched_block(state[0:3], r, v.half_size, blocks, grid)
+    block = touched_block(state[0:3], r, v.half_size, where.blocks, where.grid)
     if block >= 0:
         stats[CONTACT_BLOCK] = block
         return COLLISION
@@ -63,12 +118,9 @@ def _stop_code(state, v: VehicleArrays, boundary, blocks, grid, stats) -> int:
 
 @njit(cache=True)
 def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int,
-              references: np.ndarray, v: VehicleArrays, model: VehicleArrays,
-              g, substeps: int,
-              dt_control: float, floor_z: float, forces: np.ndarray, noise: np.ndarray,
-              noisy: bool, boundary: np.ndarray, blocks: np.ndarray, grid,
-              record_every: int, record_states: np.ndarray, record_commands: np.ndarray,
-              stats: np.ndarray) -> tuple[int, int]:
+              references: np.ndarray, v: VehicleArrays, model: VehicleArrays, g,
+              substeps: int, dt_control: float, where: Scene, acting: Disturbances,
+              record: Record) -> tuple[int, int]:
     """Run control steps ``first..last - 1``; returns (stop code, steps done).
 
     Args:
@@ -85,41 +137,33 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         g: the controller's compiled gains.
         substeps: RK4 steps per control step.
         dt_control: control period, s.
-        floor_z: height of the floor, m (-inf: none).
-        forces: (K, 3) external force per control step, N.
-        noise: (K, 12) measurement noise per control step.
-        noisy: whether to add ``noise`` (skipped when all zero).
-        boundary: (6,) the box the centre must stay in, m.
-        blocks: (N, 6) real blocks.
-        grid: :func:`~quadnav.sim.collision.body_grid` of ``blocks``.
-        record_every: control steps per recorded row.
-        record_states: (R, 17) recorded states: row ``k // record_every`` is written at
-            control steps ``k`` divisible by ``record_every``.
-        record_commands: (R, 4) recorded motor commands, likewise.
-        stats: (:data:`STATS_SIZE`,) running tracking statistics, updated in place.
+        where: the boundary, blocks and floor (:func:`scene`).
+        acting: forces and sensor noise per control step.
+        record: where the states, commands and statistics go (:func:`new_record`).
     """
     dt = dt_control / substeps
     last_reference = references.shape[0] - 1
     for k in range(first, last):
         reference = references[min(k, last_reference)]
-        seen = _measured(state, noise[k]) if noisy else state
+        seen = _measured(state, acting.noise[k]) if acting.noisy else state
         commands = step(memory, seen, reference, g, model, dt_control)
         error = 0.0
         velocity_error = 0.0
         for a in range(3):
             error += (state[a] - reference[a]) ** 2
             velocity_error += (state[3 + a] - reference[3 + a]) ** 2
+        stats = record.stats
         stats[SUM_SQUARED_ERROR] += error
         stats[MAX_ERROR] = max(stats[MAX_ERROR], math.sqrt(error))
         stats[MAX_VELOCITY_ERROR] = max(stats[MAX_VELOCITY_ERROR], math.sqrt(velocity_error))
         stats[STEPS] += 1.0
         stats[SATURATED] += memory[STEP_SATURATED]
-        if k % record_every == 0:
-            record_states[k // record_every] = state
-            record_commands[k // record_every] = commands
+        if k % record.every == 0:
+            record.states[k // record.every] = state
+            record.commands[k // record.every] = commands
         for _ in range(substeps):
-            rk4_step(state, commands, v, forces[k], dt, floor_z)
-            code = _stop_code(state, v, boundary, blocks, grid, stats)
+            rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z)
+            code = _stop_code(state, v, where, stats)
             if code != RUNNING:
                 return code, k + 1 - first
     return RUNNING, last - first
@@ -127,7 +171,7 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
 
 def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
     """:func:`fly_steps` with ``controller``'s step and gains: ``args`` are the arguments
-    after ``step`` with the gains left out, from ``state`` to ``stats`` in order.
+    after ``step`` with the gains left out, from ``state`` to ``record`` in order.
 
     The loop is compiled once per type of gains and kept in numba's cache on disk (the
     step is passed as a first-class function, so a new controller does not recompile

@@ -21,7 +21,6 @@ from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
 from quadnav.sim import loop
-from quadnav.sim.collision import body_grid
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.reference import Reference
@@ -124,50 +123,36 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
     memory = controller.new_memory()
-    if world is None:
-        boundary = np.array([-np.inf] * 3 + [np.inf] * 3)
-        world_blocks = np.zeros((0, 6))
-        grid_world = World(np.array([-1.0, -1, -1, 1, 1, 1]))
-        floor_z = -np.inf
-    else:
-        boundary = world.boundary + np.repeat([-1.0, 1.0], 3) * settings.boundary_tolerance
-        world_blocks = np.array(world.blocks)
-        grid_world = world
-        floor_z = float(world.lower[2])
-    grid = body_grid(grid_world, vehicle.half_size)
+    where = loop.scene(world, vehicle.half_size, settings.boundary_tolerance)
+    acting = loop.Disturbances(forces, noise, settings.noisy)
     every = settings.record_every
-    rows = (steps + every - 1) // every
-    record_states = np.zeros((rows, STATE_SIZE))
-    record_commands = np.zeros((rows, 4))
-    stats = np.zeros(loop.STATS_SIZE)
-    stats[loop.CONTACT_BLOCK] = -1
+    record = loop.new_record(steps, every)
     chunk = max(1, round(CHUNK_SECONDS / dt))
     done, code = 0, loop.RUNNING
     while done < steps and code == loop.RUNNING:
         last = min(done + chunk, steps)
         code, ran = loop.run_steps(
             controller, state, memory, done, last, references, vehicle, controller_model,
-            settings.substeps, dt, floor_z, forces, noise, settings.noisy, boundary,
-            world_blocks, grid, every, record_states, record_commands, stats)
+            settings.substeps, dt, where, acting, record)
         done += ran
         if progress is not None:
             progress(done / steps)
     kept = (done - 1) // every + 1
     t = np.append(np.arange(kept) * every * dt, done * dt)
     ending = _ENDINGS.get(code, Ending.COMPLETED)
-    count = max(stats[loop.STEPS], 1.0)
+    count = max(record.stats[loop.STEPS], 1.0)
     return Flight(
-        t=t, states=np.vstack([record_states[:kept], state]),
-        commands=np.vstack([record_commands[:kept], record_commands[kept - 1]]),
+        t=t, states=np.vstack([record.states[:kept], state]),
+        commands=np.vstack([record.commands[:kept], record.commands[kept - 1]]),
         reference=np.vstack([references[::every][:kept], references[min(done, steps - 1)]]),
         goal=np.array(trajectory.position(trajectory.duration)), ending=ending,
         contact_time=None if ending is Ending.COMPLETED else done * dt,
-        contact_block=(int(stats[loop.CONTACT_BLOCK]) if ending is Ending.COLLISION
+        contact_block=(int(record.stats[loop.CONTACT_BLOCK]) if ending is Ending.COLLISION
                        else None),
-        rms_tracking_error=float(np.sqrt(stats[loop.SUM_SQUARED_ERROR] / count)),
-        max_tracking_error=float(stats[loop.MAX_ERROR]),
-        max_velocity_error=float(stats[loop.MAX_VELOCITY_ERROR]),
-        mixer_saturation=float(stats[loop.SATURATED] / count),
+        rms_tracking_error=float(np.sqrt(record.stats[loop.SUM_SQUARED_ERROR] / count)),
+        max_tracking_error=float(record.stats[loop.MAX_ERROR]),
+        max_velocity_error=float(record.stats[loop.MAX_VELOCITY_ERROR]),
+        mixer_saturation=float(record.stats[loop.SATURATED] / count),
         wall_time=time.perf_counter() - began,
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
