@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,6 +28,8 @@ from quadnav.planning.rrtstar_kernel import (
     BEST_VERTEX,
     ITERATIONS,
     NODES,
+    Query,
+    Tree,
     grow,
     start_tree,
 )
@@ -57,62 +58,43 @@ def _frame(start: np.ndarray, goal: np.ndarray) -> np.ndarray:
     return q * np.sign(np.diag(r))
 
 
-@dataclass
-class TreeState:
-    """The arrays the kernel reads and writes; grown by doubling when full."""
+def empty_tree(capacity: int) -> Tree:
+    """Arrays for ``capacity`` vertices, nothing in them (no solution yet)."""
+    return Tree(
+        nodes=np.zeros((capacity, 3)),
+        cost=np.zeros(capacity),
+        parent=np.full(capacity, -1, dtype=np.int64),
+        first_child=np.full(capacity, -1, dtype=np.int64),
+        next_sibling=np.full(capacity, -1, dtype=np.int64),
+        goal_vertices=np.zeros(capacity, dtype=np.int64),
+        near=np.zeros(capacity, dtype=np.int64),
+        near_distance=np.zeros(capacity),
+        near_order=np.zeros(capacity),
+        stack=np.zeros(capacity, dtype=np.int64),
+        node_grid=new_node_grid(capacity),
+        counts=np.zeros(3, dtype=np.int64),
+        best=np.array([np.inf, -1.0]),
+    )
 
-    nodes: np.ndarray
-    cost: np.ndarray
-    parent: np.ndarray
-    first_child: np.ndarray
-    next_sibling: np.ndarray
-    goal_vertices: np.ndarray
-    near: np.ndarray
-    near_distance: np.ndarray
-    near_order: np.ndarray
-    stack: np.ndarray
-    node_grid: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
-    @classmethod
-    def empty(cls, capacity: int) -> TreeState:
-        """Arrays for ``capacity`` vertices, nothing in them."""
-        return cls(
-            nodes=np.zeros((capacity, 3)),
-            cost=np.zeros(capacity),
-            parent=np.full(capacity, -1, dtype=np.int64),
-            first_child=np.full(capacity, -1, dtype=np.int64),
-            next_sibling=np.full(capacity, -1, dtype=np.int64),
-            goal_vertices=np.zeros(capacity, dtype=np.int64),
-            near=np.zeros(capacity, dtype=np.int64),
-            near_distance=np.zeros(capacity),
-            near_order=np.zeros(capacity),
-            stack=np.zeros(capacity, dtype=np.int64),
-            node_grid=new_node_grid(capacity),
-        )
+def grown_tree(tree: Tree, capacity: int, origin: np.ndarray, extent: np.ndarray) -> Tree:
+    """A copy of the full ``tree`` with room for ``capacity`` vertices, whose node grid over
+    the box ``origin`` (3,), ``extent`` (3,) is rebuilt; counts and best are shared."""
+    count = int(tree.counts[NODES])
+    bigger = empty_tree(capacity)._replace(counts=tree.counts, best=tree.best)
+    for name in ("nodes", "cost", "parent", "first_child", "next_sibling", "goal_vertices"):
+        getattr(bigger, name)[:count] = getattr(tree, name)[:count]
+    rebuild(bigger.nodes, count, origin, extent, *bigger.node_grid)
+    return bigger
 
-    @property
-    def capacity(self) -> int:
-        """How many vertices fit."""
-        return len(self.cost)
 
-    def grown(self, count: int, capacity: int, origin: np.ndarray, extent: np.ndarray
-               ) -> TreeState:
-        """A copy with room for ``capacity`` vertices holding the first ``count``, whose
-        node grid over the box ``origin`` (3,), ``extent`` (3,) is rebuilt."""
-        bigger = TreeState.empty(capacity)
-        for name in ("nodes", "cost", "parent", "first_child", "next_sibling",
-                     "goal_vertices"):
-            getattr(bigger, name)[:count] = getattr(self, name)[:count]
-        rebuild(bigger.nodes, count, origin, extent, *bigger.node_grid)
-        return bigger
-
-    def path_to(self, vertex: int) -> np.ndarray:
-        """Vertices (K, 3) from the root to ``vertex``."""
-        chain = []
-        while vertex >= 0:
-            chain.append(vertex)
-            vertex = int(self.parent[vertex])
-        return self.nodes[chain[::-1]].copy()
+def path_to(tree: Tree, vertex: int) -> np.ndarray:
+    """Vertices (K, 3) from the root to ``vertex``."""
+    chain = []
+    while vertex >= 0:
+        chain.append(vertex)
+        vertex = int(tree.parent[vertex])
+    return tree.nodes[chain[::-1]].copy()
 
 
 @functools.cache
@@ -124,7 +106,9 @@ def _load_kernels() -> None:
     start, goal = np.array([0.1, 0.1, 0.1]), np.array([0.9, 0.9, 0.9])
     problem = PlanningProblem.free(world, world, start, goal)
     _search(problem, PlannerSettings(max_iterations=200, seed=0, time_limit=3600.0), None)
-    TreeState.empty(1).grown(1, 2, world.lower, world.extent)
+    tree = empty_tree(1)
+    tree.counts[NODES] = 1
+    grown_tree(tree, 2, world.lower, world.extent)
 
 
 def plan_rrtstar(problem: PlanningProblem, settings: PlannerSettings,
@@ -156,12 +140,10 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     cap = settings.max_iterations or PLAN_ITERATIONS.high  # also bounds the tree's memory
     limit = cap
     stopped_by = None
-    state = TreeState.empty(min(_INITIAL_CAPACITY, limit + 1))
-    counts = np.zeros(3, dtype=np.int64)
-    best = np.array([np.inf, -1.0])
-    start_tree(start, goal, goal_tolerance, grid, state.nodes, state.cost, state.parent,
-               state.first_child, state.next_sibling, origin, extent, state.node_grid,
-               state.goal_vertices, counts, best)
+    query = Query(start, goal, tuning, rotation, grid, origin, extent)
+    tree = empty_tree(min(_INITIAL_CAPACITY, limit + 1))
+    counts, best = tree.counts, tree.best
+    start_tree(query, tree)
     history: list[tuple[float, float]] = []
     time_to_first = None
     chunk = _FIRST_CHUNK
@@ -183,27 +165,25 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
             stopped_by = None
         if stopped_by is not None:
             break
-        if counts[NODES] == state.capacity:  # full: grow at a count the seed fixes
-            state = state.grown(int(counts[NODES]), 2 * state.capacity, origin, extent)
+        if counts[NODES] == len(tree.cost):  # full: grow at a count the seed fixes
+            tree = grown_tree(tree, 2 * len(tree.cost), origin, extent)
         # An iteration adds at most one vertex: a chunk never outgrows the arrays, so they
         # grow (and the node grid is rebuilt) at the same iteration however long chunks take.
-        chunk = int(min(chunk, limit - counts[ITERATIONS], state.capacity - counts[NODES]))
+        chunk = int(min(chunk, limit - counts[ITERATIONS], len(tree.cost) - counts[NODES]))
         began = time.perf_counter()
-        grow(rng, chunk, bool(best[BEST_VERTEX] < 0), start, goal, tuning, rotation, grid,
-             state.nodes, state.cost, state.parent, state.first_child, state.next_sibling,
-             origin, extent, state.node_grid, state.goal_vertices, counts, best, state.near,
-             state.near_distance, state.near_order, state.stack)
+        grow(rng, chunk, bool(best[BEST_VERTEX] < 0), query, tree)
         if time.perf_counter() - began < CHUNK_SECONDS:
             chunk = min(2 * chunk, _MAX_CHUNK)
     count = int(counts[NODES])
     stats = PlanStats(iterations=int(counts[ITERATIONS]), nodes=count,
                       seconds=time.perf_counter() - clock, time_to_first=time_to_first,
                       cost_history=np.array(history).reshape(-1, 2), stopped_by=stopped_by)
-    tree = (state.nodes[:count].copy(), state.parent[:count].copy())
+    explored = (tree.nodes[:count].copy(), tree.parent[:count].copy())
     if best[BEST_VERTEX] < 0:
-        return PlanResult(NAME, False, np.zeros((0, 3)), *tree, stats, settings.seed,
+        return PlanResult(NAME, False, np.zeros((0, 3)), *explored, stats, settings.seed,
                           no_path_message(stats, cap, settings.time_limit))
-    search_path = state.path_to(int(best[BEST_VERTEX]))
+    search_path = path_to(tree, int(best[BEST_VERTEX]))
     if not np.array_equal(search_path[-1], goal):
         search_path = np.vstack([search_path, goal])
-    return PlanResult(NAME, True, problem.full_path(search_path), *tree, stats, settings.seed)
+    return PlanResult(NAME, True, problem.full_path(search_path), *explored, stats,
+                      settings.seed)

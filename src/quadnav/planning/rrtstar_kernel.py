@@ -26,6 +26,7 @@ so that the search can be run in chunks between wall-clock checks.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -163,10 +164,44 @@ def _try_goal(vertex, goal, goal_tolerance, nodes, grid, goal_vertices, counts):
         counts[GOAL_VERTICES] += 1
 
 
+class Query(NamedTuple):
+    """What the search is for, as the kernels take it."""
+
+    start: np.ndarray  # (3,) m
+    goal: np.ndarray  # (3,) m
+    settings: np.ndarray  # (5,): step m, goal bias, goal tolerance m, rewire factor, informed
+    rotation: np.ndarray  # (3, 3) whose first column points from start to goal
+    grid: tuple  # the block grid of the inflated world (quadnav.world.blockgrid)
+    origin: np.ndarray  # (3,) lower corner of the sampled box, m
+    extent: np.ndarray  # (3,) its size, m
+
+
+class Tree(NamedTuple):
+    """The tree's arrays, written in place (room for ``len(cost)`` vertices)."""
+
+    nodes: np.ndarray  # (C, 3) vertices, m
+    cost: np.ndarray  # (C,) path length from the root, m
+    parent: np.ndarray  # (C,) parent vertex, -1 for the root
+    first_child: np.ndarray  # (C,) children as linked lists
+    next_sibling: np.ndarray  # (C,)
+    goal_vertices: np.ndarray  # (C,) vertices joined to the goal
+    near: np.ndarray  # (C,) scratch: the near vertices of a new one
+    near_distance: np.ndarray  # (C,) scratch
+    near_order: np.ndarray  # (C,) scratch
+    stack: np.ndarray  # (C,) scratch: subtree walk
+    node_grid: tuple  # the vertices by cell (quadnav.planning.nodegrid)
+    counts: np.ndarray  # (3,) int: NODES, ITERATIONS, GOAL_VERTICES
+    best: np.ndarray  # (2,): BEST_COST m, BEST_VERTEX (-1: none)
+
+
 @njit(cache=True)
-def start_tree(start, goal, goal_tolerance, grid, nodes, cost, parent, first_child,
-               next_sibling, origin, extent, node_grid, goal_vertices, counts, best):
-    """Make ``start`` the root (vertex 0) and check whether it reaches the goal at once."""
+def start_tree(query: Query, tree: Tree) -> None:
+    """Make the query's start the root (vertex 0) and check whether it reaches the goal at
+    once."""
+    start, goal, settings, _, grid, origin, extent = query
+    goal_tolerance = settings[2]
+    nodes, cost, parent, first_child, next_sibling, goal_vertices = tree[:6]
+    node_grid, counts, best = tree.node_grid, tree.counts, tree.best
     heads, next_in_cell, shape, inverse_cell = node_grid
     nodes[0] = start
     cost[0] = 0.0
@@ -180,14 +215,13 @@ def start_tree(start, goal, goal_tolerance, grid, nodes, cost, parent, first_chi
 
 
 @njit(cache=True)
-def grow(rng, iterations, stop_on_solution, start, goal, settings, rotation, grid, nodes,
-         cost, parent, first_child, next_sibling, origin, extent, node_grid, goal_vertices,
-         counts, best, near, near_distance, near_order, stack):
+def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree) -> None:
     """Run up to ``iterations`` RRT* iterations; returns early when ``stop_on_solution``
-    and a solution exists. Capacity for ``iterations`` more vertices must be free.
-
-    ``settings`` is (step m, goal bias, goal tolerance m, rewire factor, informed 0/1).
-    """
+    and a solution exists. Capacity for ``iterations`` more vertices must be free."""
+    start, goal, settings, rotation, grid, origin, extent = query
+    nodes, cost, parent, first_child, next_sibling, goal_vertices = tree[:6]
+    near, near_distance, near_order, stack = tree[6:10]
+    node_grid, counts, best = tree.node_grid, tree.counts, tree.best
     heads, next_in_cell, shape, inverse_cell = node_grid
     step, goal_bias, goal_tolerance, rewire_factor, informed = (
         settings[0], settings[1], settings[2], settings[3], settings[4])
