@@ -6,26 +6,31 @@ A reference is any object with ``duration`` (s) and ``position(t)``, ``velocity(
 ``sample(dt)`` (inherit :class:`~quadnav.trajectory.reference.Sampling` for it). Use this
 file as a template.
 
-Run: python examples/custom_reference.py
+Run: python examples/custom_reference.py [MAP X Y Z]   (default: open space; with a map, the
+rose is centred at (X, Y, Z) in it, and a touch of a block ends the flight)
 """
 
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
 from quadnav.trajectory.reference import Sampling
+from quadnav.world import load_world
 
 
 @dataclass(frozen=True)
 class Rose(Sampling):
-    """``r = radius cos(petals θ)`` in the horizontal plane at ``height``, θ = ω t, with
-    the phase rate ramped smoothly from and to rest over ``ramp`` s."""
+    """``r = radius cos(petals θ)`` in the horizontal plane through ``centre`` (m), θ = ω t,
+    with the phase rate ramped smoothly from and to rest over ``ramp`` s."""
 
     radius: float = 1.0
     petals: int = 3
     period: float = 12.0
-    height: float = 1.0
+    centre: tuple = (0.0, 0.0, 1.0)
     ramp: float = 2.0
 
     @property
@@ -67,7 +72,7 @@ class Rose(Sampling):
         theta, rate, rate_dot = self._phase(t)
         p, dp, ddp = self._shape(theta)
         flat = np.zeros((len(theta), 1))
-        return (np.hstack([p, flat + self.height]), np.hstack([dp * rate[:, None], flat]),
+        return (np.hstack([p, flat]) + self.centre, np.hstack([dp * rate[:, None], flat]),
                 np.hstack([ddp * rate[:, None] ** 2 + dp * rate_dot[:, None], flat]))
 
     def position(self, t):
@@ -88,8 +93,11 @@ def _as_given(t, values):
     return values[0] if np.ndim(t) == 0 else values
 
 if __name__ == "__main__":
-    tracking = track_reference(Rose())
-    metrics = tracking.metrics()
-    print(f"rose: success {metrics['success']}, RMS tracking error "
-          f"{100 * metrics['rms_tracking_error_m']:.2f} cm, max "
-          f"{100 * metrics['max_tracking_error_m']:.2f} cm")
+    if len(sys.argv) > 1:  # in a map: the real blocks and boundary, exact contact checks
+        world, centre = load_world(sys.argv[1]), tuple(map(float, sys.argv[2:5]))
+        flight = simulate(Rose(centre=centre), world=world)
+        where = f"in {Path(sys.argv[1]).name} round {centre}"
+    else:
+        flight, where = track_reference(Rose()).flight, "in open space"
+    print(f"rose {where}: {flight.ending.value}, RMS tracking error "
+          f"{100 * flight.rms_tracking_error:.2f} cm, max {100 * flight.max_tracking_error:.2f} cm")

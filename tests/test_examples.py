@@ -56,9 +56,13 @@ def test_a_trajectory_method_of_ones_own_flies(run_example):
     assert out.startswith("minimum jerk: success True"), out
 
 
-def test_a_reference_of_ones_own_is_tracked(run_example):
-    out = run_example("custom_reference.py")
-    assert out.startswith("rose: success True"), out
+def test_a_reference_of_ones_own_is_tracked(run_example, shared_maps):
+    assert run_example("custom_reference.py").startswith("rose in open space: completed")
+    cube = str(shared_maps / "meam620/single_cube.txt")
+    out = run_example("custom_reference.py", cube, "1", "1", "3")
+    assert out.startswith("rose in single_cube.txt round (1.0, 1.0, 3.0): completed"), out
+    out = run_example("custom_reference.py", cube, "5", "4", "3")  # a petal through the cube
+    assert out.startswith("rose in single_cube.txt round (5.0, 4.0, 3.0): collision"), out
 
 
 def test_a_batch_study(run_example, tmp_path):
