@@ -77,14 +77,16 @@ class Lander:
             except AutoLandingError as error:
                 self.log.event(f"land: {error}")
                 if self._await_floor():
-                    return Landing(True, "it is on the floor at about "
-                                         f"{self.floor_point()} (state packets)")
+                    return self._on_floor()
             except (LinkLostError, CommandRefusedError) as error:
                 self.log.event(f"land: {error}")
-            if self.on_floor():
-                return Landing(True, f"on the floor at about {self.floor_point()} (state "
-                                     "packets)")
+            if self.on_floor():  # already down (a refused 'land' comes after the landing)
+                return self._on_floor()
         return Landing(False, f"'land' got no answer ({LAND_ATTEMPTS} tries)")
+
+    def _on_floor(self) -> Landing:
+        """Landed, as the state packets show: one message whichever way it was seen."""
+        return Landing(True, f"it is on the floor at about {self.floor_point()} (state packets)")
 
     def _await_floor(self) -> bool:
         """Wait (up to a landing's time) for fresh state packets with the drone on the
