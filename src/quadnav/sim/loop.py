@@ -13,6 +13,7 @@ calls it for a controller.
 from __future__ import annotations
 
 import math
+import threading
 from typing import Any, NamedTuple
 
 import numba
@@ -169,6 +170,9 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
     return RUNNING, last - first
 
 
+_compiling = threading.Lock()
+
+
 def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
     """:func:`fly_steps` with ``controller``'s step and gains: ``args`` are the arguments
     after ``step`` with the gains left out, from ``state`` to ``record`` in order.
@@ -179,10 +183,11 @@ def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
     """
     args = (*args[:7], controller.gains, *args[7:])
     signature = (controller.function_type(args[6]), *(numba.typeof(a) for a in args))
-    if signature not in fly_steps.overloads:
-        fly_steps.disable_compile(False)
-        try:
-            fly_steps.compile(signature)
-        finally:
-            fly_steps.disable_compile(True)
+    with _compiling:  # the emulator's thread and the caller's may both get here
+        if signature not in fly_steps.overloads:
+            fly_steps.disable_compile(False)
+            try:
+                fly_steps.compile(signature)
+            finally:
+                fly_steps.disable_compile(True)
     return fly_steps(controller.step, *args)
