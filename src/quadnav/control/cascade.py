@@ -35,6 +35,7 @@ from numba import njit
 
 from quadnav.control.contract import SATURATED, Controller
 from quadnav.control.gains import Gains
+from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import VehicleArrays
 from quadnav.vehicle.rotors import mix
@@ -199,10 +200,7 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
     _scale_xy(a_sp, g.acceleration_xy)
 
     # 3. thrust vector, with the drag at the reference velocity as feed-forward
-    drag = np.empty(3)
-    for b in range(3):
-        drag[b] = v.drag[b] * (r[0, b] * reference[3] + r[1, b] * reference[4]
-                               + r[2, b] * reference[5])
+    drag = reference_drag(r, v, reference)
     force = np.empty(3)
     for a in range(3):
         force[a] = (v.mass * a_sp[a] + r[a, 0] * drag[0] + r[a, 1] * drag[1]
@@ -258,11 +256,7 @@ def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
         if not saturated:
             memory[_RATE_INTEGRAL + b] = _clip(
                 memory[_RATE_INTEGRAL + b] + g.rate[1, b] * e * dt, g.rate[3, b])
-    wx, wy, wz = state[10], state[11], state[12]
-    jx, jy, jz = v.inertia[0] * wx, v.inertia[1] * wy, v.inertia[2] * wz
-    torque[0] += wy * jz - wz * jy
-    torque[1] += wz * jx - wx * jz
-    torque[2] += wx * jy - wy * jx
+    add_gyroscopic(torque, state, v)
 
     # 6. mixer
     wrench = np.array([collective, torque[0], torque[1], torque[2]])

@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from quadnav.control.contract import SATURATED, Controller
+from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import VehicleArrays
 from quadnav.vehicle.rotors import mix
@@ -68,11 +69,9 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
         force[a] = v.mass * (-g.kx[a] * (state[a] - reference[a])
                              - g.kv[a] * (state[3 + a] - reference[3 + a]) + reference[6 + a])
     force[2] += v.mass * v.gravity
-    for b in range(3):  # the drag at the reference velocity, body axes, as feed-forward
-        drag = v.drag[b] * (r[0, b] * reference[3] + r[1, b] * reference[4]
-                            + r[2, b] * reference[5])
-        for a in range(3):
-            force[a] += r[a, b] * drag
+    drag = reference_drag(r, v, reference)  # as feed-forward, in world axes
+    for a in range(3):
+        force[a] += r[a, 0] * drag[0] + r[a, 1] * drag[1] + r[a, 2] * drag[2]
     collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
 
     b3 = force / math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2)
@@ -88,9 +87,7 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
     w = state[10:13]
     for b in range(3):
         torque[b] = v.inertia[b] * (-g.kr[b] * e_r[b] - g.kw[b] * (w[b] - w_d[b]))
-    torque[0] += w[1] * v.inertia[2] * w[2] - w[2] * v.inertia[1] * w[1]
-    torque[1] += w[2] * v.inertia[0] * w[0] - w[0] * v.inertia[2] * w[2]
-    torque[2] += w[0] * v.inertia[1] * w[1] - w[1] * v.inertia[0] * w[0]
+    add_gyroscopic(torque, state, v)
 
     wrench = np.array([collective, torque[0], torque[1], torque[2]])
     thrusts, changed = mix(wrench, v.mixer, v.max_rotor_thrust)
