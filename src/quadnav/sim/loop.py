@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import threading
+import weakref
 from typing import Any, NamedTuple
 
 import numba
@@ -171,6 +172,9 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
 
 
 _compiling = threading.Lock()
+#: Controllers whose loop this process has loaded (the emulator calls run_steps every
+#: 10 ms, and working out the loop's signature takes half a millisecond).
+_loaded: weakref.WeakSet[Controller] = weakref.WeakSet()
 
 
 def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
@@ -180,8 +184,14 @@ def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
     The loop is compiled once per type of gains and kept in numba's cache on disk (the
     step is passed as a first-class function, so a new controller does not recompile
     it); then compiling stays off, so a call never compiles a loop for one step alone.
+    The first call with a controller loads its loop; later ones go straight to it.
     """
     args = (*args[:7], controller.gains, *args[7:])
+    if controller in _loaded:
+        try:
+            return fly_steps(controller.step, *args)
+        except TypeError:  # other argument types than its loop was loaded for
+            pass
     signature = (controller.function_type(args[6]), *(numba.typeof(a) for a in args))
     with _compiling:  # the emulator's thread and the caller's may both get here
         if signature not in fly_steps.overloads:
@@ -190,4 +200,5 @@ def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
                 fly_steps.compile(signature)
             finally:
                 fly_steps.disable_compile(True)
+    _loaded.add(controller)
     return fly_steps(controller.step, *args)
