@@ -46,7 +46,8 @@ print("loaded:", *(name for name in heavy if name in sys.modules))
 
 @pytest.mark.parametrize(("args", "loaded"), [
     (["--version"], ""), (["--help"], ""), (["nosuch"], ""),
-    (["worlds"], "numba numpy scipy quadnav.cli.worlds_command")])
+    (["worlds"], "numba numpy scipy quadnav.cli.worlds_command"),
+    (["fly", "--help"], "numba numpy scipy quadnav.cli.fly_command")])  # no plotting
 def test_a_command_line_loads_only_the_command_it_runs(args, loaded):
     """--version, --help and a typo load no command and none of the numeric stack; a
     command loads its own module and not the others'."""

@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from quadnav.mission import Mission
-from quadnav.report.html_report import write_report
 from quadnav.runfolder import replaced_folder
 from quadnav.runs import (
     REPORT,
@@ -18,9 +17,6 @@ from quadnav.runs import (
     write_run_files,
 )
 from quadnav.tracking import Tracking
-from quadnav.viz.figures import save_figure
-from quadnav.viz.flight_figures import figure_makers
-from quadnav.viz.html_viewer import write_viewer
 
 
 def write_run(run: Mission | Tracking | RunContent, folder: str | Path, figures: bool = True,
@@ -49,13 +45,19 @@ def _write_files(content: RunContent, staging: Path, folder: Path, figures: bool
     if not (figures or html):
         return written
     run = read_run(staging)
-    if figures:
+    if figures:  # plotting is imported only when drawn: --no-figures runs never load it
+        from quadnav.report.html_report import write_report
+        from quadnav.viz.figures import save_figure
+        from quadnav.viz.flight_figures import figure_makers
+
         makers = figure_makers(run)
         for name, make in makers.items():
             save_figure(make(run), staging / name)
         write_report([run], staging / REPORT, shown=[folder])
         written += [*makers, REPORT]
     if html:
+        from quadnav.viz.html_viewer import write_viewer
+
         write_viewer(run, staging / VIEW_PAGE)
         written.append(VIEW_PAGE)
     return written
