@@ -232,6 +232,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "max_velocity_error_m_s": flight.max_velocity_error,
         "min_clearance_m": min_clearance(flight, world),
         "mixer_saturation": flight.mixer_saturation,
+        "rotor_energy_j": flight.rotor_energy,
         "sim_wall_time_s": flight.wall_time,
         "real_time_factor": flight.duration / flight.wall_time if flight.wall_time else None,
     }

@@ -58,6 +58,7 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
     ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
     ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),
+    ("rotor_energy_j", FLOAT),
     ("sim_wall_time_s", FLOAT), ("real_time_factor", FLOAT),
 )
 #: Every column, in order, with its type.

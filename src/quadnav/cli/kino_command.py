@@ -5,19 +5,23 @@ world sliced at ``--height``, by default half way up its z range); ``quadnav kin
 quadrotor`` plans in a 3D map. Both write into the output folder:
 
 * ``kino.json`` — the query, the outcome and the search statistics, the settings and the
-  vehicle's parameters; for the quadrotor also how far the controls flown open loop end
-  from the planned positions (``replay``: point mass; ``replay_6dof``: full dynamics);
+  vehicle's parameters; for the quadrotor also how far the controls replayed open loop
+  through the point-mass model end from the planned positions (``replay``) and, with
+  ``--fly``, the closed-loop flight's headline figures (``flight``);
 * ``states.csv`` — the planned states, one row per tree state on the plan: ``t`` (s from
   the start) then the state's coordinates;
 * ``controls.csv`` — one row per control of the plan: ``t_start``, ``duration`` (s) and
   the control (for the differential drive also the two wheel speeds);
 * ``kino.png`` (tree and plan) and ``controls.png`` (the control profiles);
 * for the differential drive also ``tracks.csv`` (the centre and both wheel paths) and,
-  with ``--compare``, ``biased_vs_unbiased.png``.
+  with ``--compare``, ``biased_vs_unbiased.png``;
+* for the quadrotor with ``--fly``, the run folder ``DIR/flight`` of the plan flown
+  closed loop (:mod:`quadnav.kinoflight`), the same files as ``quadnav fly -o DIR``
+  writes, read by ``report``, ``view``, ``animate`` and ``blender``.
 
-Exit 0 when the goal region is reached; 1 when it is not (the CSV files are then removed
-and the rest is still written); 2 on bad input, as one line on stderr with nothing
-written.
+Exit 0 when the goal region is reached (and, with ``--fly``, the flight succeeded); 1 when
+it is not or the flight failed (the CSV files are removed when there is no plan, and the
+rest is still written); 2 on bad input, as one line on stderr with nothing written.
 """
 
 from __future__ import annotations
@@ -38,8 +42,10 @@ from tqdm import tqdm
 
 from quadnav.arrays import FloatArray
 from quadnav.cli.args import (
+    add_controller_argument,
     add_margin_argument,
     add_start_goal_arguments,
+    add_vehicle_arguments,
     coordinate,
     length,
     margin_value,
@@ -47,6 +53,7 @@ from quadnav.cli.args import (
     plan_time,
     resolve_margin,
     seed_value,
+    vehicle_and_gains,
 )
 from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
@@ -65,17 +72,15 @@ from quadnav.limits import (
     PLAN_TIME,
 )
 from quadnav.runfolder import check_output_folder, replaced_folder
-from quadnav.sim.replay6dof import (
-    DRIFT_RATE,
-    replay_6dof,
-    replay_6dof_tolerance,
-    replay_vehicle,
-    response_delays,
-)
 from quadnav.world import load_world
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+    from quadnav.control.gains import Gains
+    from quadnav.kinoflight import KinoFlight
+    from quadnav.vehicle.params import VehicleParams
+    from quadnav.world.model import World
 
 #: Exit code when the search ends without reaching the goal region (the input was fine).
 EXIT_NOT_REACHED = 1
@@ -85,6 +90,12 @@ PLAN_FILES = ("states.csv", "controls.csv", "tracks.csv")
 COMPARE_FIGURE = "biased_vs_unbiased.png"
 #: Every file kino writes.
 KINO_FILES = ("kino.json", *PLAN_FILES, "kino.png", "controls.png", COMPARE_FIGURE)
+#: The run folder of ``kino quadrotor --fly``, inside the output folder.
+FLIGHT_FOLDER = "flight"
+#: The flight's figures copied into kino.json (all of them are in flight/metrics.json).
+FLIGHT_KEYS = ("success", "ending", "flight_time_s", "rms_tracking_error_m",
+               "max_tracking_error_m", "final_error_m", "min_clearance_m", "flight_margin_m",
+               "rotor_energy_j")
 #: Largest deviation, m, of the wheel tracks in tracks.csv from the true wheel paths.
 TRACK_TOLERANCE = 0.01
 
@@ -295,28 +306,6 @@ def replay_error(model: SampledQuadrotor, result: KinoResult) -> float | None:
     return float(np.max(replay_errors(result, times, states[:, :3])))
 
 
-def replay_6dof_summary(model: SampledQuadrotor, result: KinoResult
-                        ) -> tuple[dict[str, Any], FloatArray | None]:
-    """The plan's controls flown open loop through the 6-DOF dynamics of
-    :func:`~quadnav.sim.replay6dof.replay_vehicle`: ``kino.json``'s entry (largest
-    distance from the planned positions, m; the tolerance at the end of the flight, m;
-    whether every planned state is within the tolerance at its time; the vehicle and the
-    leads, s) and the flown positions (N, 3), ``None`` without a plan."""
-    vehicle = replay_vehicle()
-    leads = response_delays(vehicle)
-    entry: dict[str, Any] = {"vehicle": vehicle.name, "attitude_lead": leads[0],
-                             "thrust_lead": leads[1], "drift_rate": DRIFT_RATE}
-    if not result.solved:
-        return {"max_position_error": None, "tolerance": None, "within_tolerance": None,
-                **entry}, None
-    times, states = replay_6dof(model, vehicle, result.states[0], result.controls,
-                                result.durations, leads=leads)
-    errors = replay_errors(result, times, states[:, :3])
-    bounds = replay_6dof_tolerance(state_times(result))
-    return {"max_position_error": float(errors.max()), "tolerance": float(bounds[-1]),
-            "within_tolerance": bool(np.all(errors <= bounds)), **entry}, states[:, :3]
-
-
 def quadrotor(args: argparse.Namespace) -> int:
     """Plan for the quadrotor and write its files; exit 1 if the goal region was not
     reached."""
@@ -333,6 +322,7 @@ def quadrotor(args: argparse.Namespace) -> int:
         ends.append(np.array(given if given is not None else own, dtype=np.float64))
     start, goal = ends
     margin = resolve_margin(args, world)
+    vehicle, gains = vehicle_and_gains(args)  # bad files are refused before planning
     model = SampledQuadrotor()
     result = search(f"quadrotor ({sampling(settings)})", args.quiet,
                     lambda progress: plan_quadrotor(world, start, goal, settings, model,
@@ -341,13 +331,66 @@ def quadrotor(args: argparse.Namespace) -> int:
     data = summary("quadrotor", world.name, result, settings, model, query)
     data["replay"] = {"max_position_error": replay_error(model, result),
                       "tolerance": REPLAY_TOLERANCE}
-    data["replay_6dof"], flown = replay_6dof_summary(model, result)
+    flown = fly_plan(args, world.replace(start=start, goal=goal, margin=margin), result, model,
+                     settings, vehicle, gains) if args.fly and result.solved else None
+    if flown is not None:
+        data["flight"] = {key: flown.metrics()[key] for key in FLIGHT_KEYS}
     tables = plan_tables(result, ("x", "y", "z", "vx", "vy", "vz"),
                          dict(zip(("phi", "theta", "thrust"), result.controls.T, strict=True)))
-    figures = {"kino.png": lambda: quadrotor_figure(world, result, model, goal, flown),
+    track = None if flown is None else flown.flight.position
+    figures = {"kino.png": lambda: quadrotor_figure(world, result, model, goal, track),
                "controls.png": lambda: quadrotor_controls_figure(result, model)}
     written = write_outputs(folder, result, data, tables, figures)
-    return finish(folder, world.name, [(sampling(settings), result)], written)
+    code = finish(folder, world.name, [(sampling(settings), result)], written)
+    if flown is None:
+        return code
+    return write_flight(flown, folder / FLIGHT_FOLDER)
+
+
+def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
+             model: SampledQuadrotor, settings: KinoSettings, vehicle: VehicleParams,
+             gains: Gains) -> KinoFlight:
+    """Fly the solved plan closed loop with ``vehicle``, ``gains`` and the controller of
+    the flags, under a progress bar."""
+    from quadnav.cli.progress import fraction_bar
+    from quadnav.kinoflight import fly_kino_plan
+    from quadnav.sim.settings import SimSettings
+
+    with fraction_bar("fly", args.quiet) as progress:
+        return fly_kino_plan(world, result, model, settings, vehicle, gains,
+                             SimSettings(seed=settings.seed), args.controller, progress)
+
+
+def write_flight(flown: KinoFlight, folder: Path) -> int:
+    """Write the run folder of the flight, print its headline figures; 0 when it
+    succeeded, else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
+    from quadnav.cli.fly_command import flight_failure
+    from quadnav.report.run_writer import write_run
+    from quadnav.runs import RunContent
+
+    result, m = flown.result, flown.metrics()
+    content = RunContent(flown.world, m, flown.parameters(),
+                         (result.tree_states[:, :3], result.tree_parents),
+                         result.states[:, :3], flown.trajectory, flown.flight)
+    written = write_run(content, folder)
+    clearance = m["min_clearance_m"]
+    print(f"flown closed loop by the {flown.controller} controller on the {m['vehicle']} "
+          f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
+          f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, then a "
+          f"{m['stop_s']:.2f} s stop)")
+    print(f"  tracking error RMS {100 * m['rms_tracking_error_m']:.2f} cm, max "
+          f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
+          f"{100 * m['final_error_m']:.2f} cm; min clearance "
+          + ("none (no blocks)" if clearance is None else f"{clearance:.3f} m"))
+    print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
+          f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
+          f"rotor energy {m['rotor_energy_j']:.1f} J")
+    print("wrote " + ", ".join(str(folder / name) for name in written))
+    if not m["success"]:
+        print(f"quadnav: flight failed: "
+              f"{flight_failure(flown.flight, flown.settings.goal_tolerance)}", file=sys.stderr)
+        return EXIT_NOT_REACHED
+    return 0
 
 
 # ------------------------------------------------------------------ arguments
@@ -421,14 +464,19 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                     "(80 g, tilt up to 0.35 rad, thrust 0.5 to 1.5 times its weight, at "
                     "most 2 m/s; controls held 0.5 s), from rest. DIR/states.csv holds "
                     "positions and velocities, DIR/controls.csv phi, theta (rad) and thrust "
-                    "(N); kino.json also gives how closely the controls flown open loop "
-                    "reproduce the planned positions: through the point-mass model (to "
-                    "round-off) and through the full 6-DOF dynamics of a Tello without drag "
-                    f"(within {DRIFT_RATE:g} m * (t / 1 s)^1.5 at time t; drawn in "
-                    "DIR/kino.png).")
+                    "(N); kino.json also gives how closely the controls replayed through "
+                    "the point-mass model reproduce the planned positions (to round-off). "
+                    "--fly also flies the plan closed loop (its states as the reference, "
+                    "then a straight stop) on the simulated vehicle, as quadnav fly "
+                    "flies a trajectory, and writes that run folder to DIR/flight.")
     p.add_argument("map", metavar="MAP",
                    help="map file (.txt or .json) or built-in world spec, e.g. forest:seed=3")
     add_start_goal_arguments(p, file=False)
     add_margin_argument(p)
     _add_search_arguments(p)
+    p.add_argument("--fly", action="store_true",
+                   help="also fly the plan closed loop on the simulated vehicle and write "
+                        "its run folder to DIR/flight (exit 1 if the flight fails)")
+    add_vehicle_arguments(p)
+    add_controller_argument(p)
     p.set_defaults(handler=quadrotor)

@@ -42,7 +42,6 @@ from __future__ import annotations
 import io
 import logging
 import signal
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
@@ -453,7 +452,7 @@ def rc_pace(plan: FlightPlan, settings: BridgeSettings) -> SlowedFlight:
 
 
 def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
-        host: str | None = None, stream: TextIO = sys.stdout,
+        host: str | None = None, stream: TextIO | None = None,
         truth: Callable[[], FloatArray] | None = None) -> tuple[Outcome, FloatArray]:
     """Fly ``plan`` on the Tello at ``host`` — or, with no host, print the commands of a
     dry run to ``stream`` — and write the log and the figure into ``folder``.
@@ -463,7 +462,7 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
         settings: mode, safety thresholds, rates, time scale.
         folder: gets :data:`~quadnav.hardware.tello_log.LOG_NAME` and :data:`TRACK_FIGURE`.
         host: the drone's IPv4 address; None for a dry run.
-        stream: where a dry run prints.
+        stream: where a dry run prints (default: standard output as it is when called).
         truth: gives the drone's true track (N, 3), m, after the flight, when known (an
             emulator's), to draw beside the dead-reckoned one.
 

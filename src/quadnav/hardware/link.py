@@ -70,9 +70,9 @@ class DryRunLink:
 
     reports_state = False
 
-    def __init__(self, log: TelloLog, stream: TextIO = sys.stdout) -> None:
+    def __init__(self, log: TelloLog, stream: TextIO | None = None) -> None:
         self._log = log
-        self._stream = stream
+        self._stream = stream or sys.stdout  # standard output as it is now
 
     def _print(self, command: str) -> None:
         self._log.command(command)

@@ -135,7 +135,8 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
     clock = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
     tree = _Tree(np.concatenate([problem.start, np.zeros(3)]))
-    for state, control, duration in leg_motions(model, problem.start_leg):
+    leg = leg_motions(model, problem.start_leg)
+    for state, control, duration in leg:
         tree.add(tree.size - 1, state, control, duration)
     extend = _Extender(model, free, world.lower[2] + margin, settings)
     closest = float(np.linalg.norm(problem.search_start - goal_point))
@@ -178,7 +179,8 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         tree_durations=tree.durations[:n], iterations=iterations, seconds=seconds,
         time_to_goal=time_to_goal, seed=settings.seed,
         message=f"{outcome}; {n} states; motions pruned: "
-                + ", ".join(f"{count} {why}" for why, count in extend.pruned.items()))
+                + ", ".join(f"{count} {why}" for why, count in extend.pruned.items()),
+        leg_controls=len(leg) if reached >= 0 else 0)
 
 
 class _Extender:
@@ -283,10 +285,8 @@ def replay(model: SampledQuadrotor, start_state: ArrayLike, controls: ArrayLike,
     states to round-off: within :data:`REPLAY_TOLERANCE` = 1e-9 (measured: 7e-12 on a
     30 s flight, 7e-11 on a 170 s one; round-off grows with the number of steps).
 
-    This checks the planner's own propagation; flying the same controls through the full
-    6-DOF vehicle (attitude and rotor response) is
-    :func:`quadnav.sim.replay6dof.replay_6dof`, which reproduces the planned
-    positions only to the tolerance those dynamics allow.
+    This checks the planner's own propagation; flying the plan on the full 6-DOF vehicle,
+    closed loop, is :func:`quadnav.kinoflight.fly_kino_plan`.
 
     Args:
         model: the vehicle.

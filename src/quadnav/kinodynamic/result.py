@@ -38,6 +38,8 @@ class KinoResult:
         time_to_goal: wall time until the goal region was reached, s, or ``None``.
         seed: the seed the search ran with.
         message: one line for the user, e.g. why there is no plan.
+        leg_controls: how many of the first controls fly the leg out of the safety margin
+            at the start (0 without a leg); the rest of the plan keeps the whole margin.
     """
 
     planner: str
@@ -54,6 +56,7 @@ class KinoResult:
     time_to_goal: float | None
     seed: int
     message: str = ""
+    leg_controls: int = 0
 
     def __post_init__(self) -> None:
         for name in ("states", "controls", "durations", "tree_states", "tree_parents",

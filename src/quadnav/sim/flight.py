@@ -40,6 +40,10 @@ class Flight:
         mixer_saturation: fraction of control steps at which the mixer had to change
             the wrench.
         wall_time: seconds the simulation took.
+        rotor_energy: the rotors' aerodynamic work over the flight, J: the drag torque
+            times the speed of each rotor, ``k_m w^3``, summed over the four and integrated
+            over the recorded samples (trapezoids); a measure to compare flights by, not a
+            battery's drain (motor and electronics losses are left out).
         info: the settings and vehicle used, JSON-ready.
     """
 
@@ -56,6 +60,7 @@ class Flight:
     max_velocity_error: float
     mixer_saturation: float
     wall_time: float
+    rotor_energy: float
     info: dict = field(default_factory=dict)
 
     @property

@@ -24,7 +24,7 @@ from quadnav.sim import loop
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.reference import Reference
-from quadnav.vehicle.dynamics import STATE_SIZE, hover_state, vehicle_arrays
+from quadnav.vehicle.dynamics import ROTORS, STATE_SIZE, hover_state, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 
@@ -141,8 +141,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     t = np.append(np.arange(kept) * every * dt, done * dt)
     ending = _ENDINGS.get(code, Ending.COMPLETED)
     count = max(record.stats[loop.STEPS], 1.0)
+    states = np.vstack([record.states[:kept], state])
     return Flight(
-        t=t, states=np.vstack([record.states[:kept], state]),
+        t=t, states=states,
         commands=np.vstack([record.commands[:kept], record.commands[kept - 1]]),
         reference=np.vstack([references[::every][:kept], references[min(done, steps - 1)]]),
         goal=np.array(trajectory.position(trajectory.duration)), ending=ending,
@@ -154,5 +155,13 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         max_velocity_error=float(record.stats[loop.MAX_VELOCITY_ERROR]),
         mixer_saturation=float(record.stats[loop.SATURATED] / count),
         wall_time=time.perf_counter() - began,
+        rotor_energy=rotor_energy(t, states, params),
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
+
+
+def rotor_energy(t: FloatArray, states: FloatArray, params: VehicleParams) -> float:
+    """The rotors' aerodynamic work, J, over states (N, 17) at times (N,) s: ``k_m w^3``
+    summed over the rotors and integrated by trapezoids (see :class:`Flight`)."""
+    power = params.torque_coefficient * np.sum(states[:, ROTORS] ** 3, axis=1)
+    return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))

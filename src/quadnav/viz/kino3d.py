@@ -18,7 +18,7 @@ from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import draw_world, map_legend
-from quadnav.viz.style import PATH_COLOR, TREE_COLOR, outlined
+from quadnav.viz.style import FLOWN_COLOR, PATH_COLOR, TREE_COLOR, outlined
 from quadnav.viz.thinning import evenly_spread
 from quadnav.world.model import World
 
@@ -27,7 +27,6 @@ MAX_TREE_SEGMENTS = 20_000
 #: Chords per tree edge, and per path edge.
 TREE_PIECES = 4
 PATH_PIECES = 16
-FLOWN_COLOR = "darkorange"
 
 
 def _motions(model: SampledQuadrotor, states: FloatArray, controls: FloatArray,
@@ -49,9 +48,9 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         result: a plan of :func:`~quadnav.kinodynamic.quadrotor.plan_quadrotor`.
         model: the vehicle it was planned for (to redraw the parabolas).
         goal: (3,) goal position, m; default the end of the path (none if unsolved).
-        flown: (N, 3) positions, m, of the plan's controls flown open loop through the
-            6-DOF dynamics (:func:`~quadnav.sim.replay6dof.replay_6dof`), drawn
-            dashed (when the plan is solved) with its distance from the planned end.
+        flown: (N, 3) positions, m, of the plan flown closed loop
+            (:func:`~quadnav.kinoflight.fly_kino_plan`), drawn dashed when the plan is
+            solved.
     """
     fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")
     ax = fig.add_subplot(projection="3d")
@@ -72,17 +71,16 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))
     if flown is not None and result.solved:
         flown = np.asarray(flown, dtype=np.float64)
-        ax.plot(*flown.T, color=FLOWN_COLOR, linewidth=1.4, linestyle="--", zorder=15)
-        miss = np.linalg.norm(flown[-1] - result.states[-1, :3])
+        ax.plot(*flown.T, color=FLOWN_COLOR, linewidth=1.4, linestyle="--", zorder=25)
         handles.append(Line2D([], [], color=FLOWN_COLOR, linewidth=1.4, linestyle="--",
-                              label=f"controls flown open loop, 6-DOF (ends {miss:.2f} m off)"))
+                              label="flown closed loop"))
     if result.solved:
         path = _motions(model, result.states[:-1], result.controls, result.durations,
                         PATH_PIECES)
         handles += ax.plot(*np.concatenate([path[:, :-1].reshape(-1, 3),
                                             result.states[-1:, :3]]).T,
                            color=PATH_COLOR, linewidth=2.2, zorder=20,
-                           path_effects=outlined(2.2), label=f"flight ({result.duration:.2f} s)")
+                           path_effects=outlined(2.2), label=f"plan ({result.duration:.2f} s)")
     ax.view_init(elev=30, azim=-60)
     map_legend(fig, world, handles)
     outcome = (f"{len(result.controls)} controls, {result.duration:.2f} s" if result.solved

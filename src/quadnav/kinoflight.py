@@ -1,0 +1,232 @@
+"""A quadrotor kinodynamic plan flown closed loop, measured as ``quadnav fly`` measures.
+
+A plan of :func:`~quadnav.kinodynamic.quadrotor.plan_quadrotor` holds each sampled control
+(roll, pitch, thrust) for its duration, so the point mass moves with a constant
+acceleration on each: its positions are exactly a piecewise quadratic of time.
+:func:`plan_trajectory` writes them as a :class:`~quadnav.trajectory.model.Trajectory`
+(a degree-2 PPoly through the planned states, the plan's own positions and velocities at
+every break). The plan reaches the goal region still moving, so the trajectory ends with
+a straight stop along the last velocity, as hard as the model's tilt and thrust limits
+allow (at most :data:`STOP_ACCELERATION`); the stop is checked exactly against the map
+inflated by the margin, and a plan whose stop would not keep it is refused.
+:func:`fly_kino_plan` flies that trajectory through
+:func:`~quadnav.sim.simulate.simulate` with any registered controller, in the real map
+with its exact contact checks, and measures it as a ``fly`` mission is measured
+(:func:`~quadnav.mission.measure_flight`: tracking errors, the margin kept by the
+trajectory and by the flight, the rotors' energy), so the two pipelines compare on
+success, time and energy.
+
+The acceleration steps where one control follows another, which a vehicle can only
+follow after its attitude has turned (about 80 ms for the Tello's attitude loop), so the
+tracking error of a plan is larger than that of a smooth trajectory at the same speed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import PPoly
+
+from quadnav.config import as_plain
+from quadnav.control.gains import Gains, load_gains
+from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.errors import QuadnavError
+from quadnav.kinodynamic.pointmass import SampledQuadrotor
+from quadnav.kinodynamic.result import KinoResult
+from quadnav.kinodynamic.settings import KinoSettings
+from quadnav.mission import flight_succeeded, measure_flight
+from quadnav.sim.flight import Flight
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
+from quadnav.trajectory.model import Trajectory, YawMode
+from quadnav.vehicle.params import VehicleParams, load_params
+from quadnav.world.model import World
+
+#: Largest deceleration of the stop that ends the trajectory, m/s^2 (the default model
+#: brakes at up to 3.6 m/s^2 horizontally, g tan 0.35 rad).
+STOP_ACCELERATION = 3.0
+#: Bisection steps of :func:`stop_acceleration`: the rate is found to 3 m/s^2 / 2^30.
+STOP_BISECTIONS = 30
+#: ``Trajectory.method`` of a kinodynamic plan.
+METHOD = "kinodynamic"
+
+
+def stop_acceleration(model: SampledQuadrotor, velocity: np.ndarray) -> np.ndarray:
+    """The constant acceleration (3,), m/s^2, that stops a point moving at ``velocity``
+    (3,) m/s straight: against it, the largest rate up to :data:`STOP_ACCELERATION` that
+    ``model`` can fly (the accelerations it can fly form a convex set around 0, so along
+    one direction they are an interval, found by bisection); zeros at rest."""
+    speed = float(np.linalg.norm(velocity))
+    if speed == 0.0:
+        return np.zeros(3)
+    direction = -np.asarray(velocity, dtype=np.float64) / speed
+    low, high = 0.0, STOP_ACCELERATION
+    if model.control_for(high * direction) is not None:
+        return high * direction
+    for _ in range(STOP_BISECTIONS):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if model.control_for(middle * direction) is not None else (
+            low, middle)
+    return low * direction
+
+
+def plan_trajectory(result: KinoResult, model: SampledQuadrotor,
+                    world: World | None = None) -> Trajectory:
+    """The solved plan ``result`` (states (K, 6) position m and velocity m/s) as a
+    piecewise quadratic trajectory: on each control, ``p + v t + a t^2 / 2`` with the
+    constant acceleration that takes the state's velocity to the next one's, then the
+    straight stop (:func:`stop_acceleration`). Its breaks are the planned states' times
+    and the end of the stop; the yaw is the model's fixed one; the leg out of the margin
+    (``result.leg_controls``) is marked as the trajectory's start leg.
+
+    Raises:
+        QuadnavError: no plan, or the stop comes closer to a block or the boundary of
+            ``world`` than its ``margin`` (checked exactly on the stop's segment).
+    """
+    if not result.solved:
+        raise QuadnavError(f"no plan to fly: {result.message}")
+    states, durations = result.states, result.durations
+    accelerations = np.diff(states[:, 3:], axis=0) / durations[:, None]
+    end_velocity = states[-1, 3:]
+    stop = stop_acceleration(model, end_velocity)
+    stop_time = float(np.linalg.norm(end_velocity) / np.linalg.norm(stop)) if stop.any() else 0.0
+    positions, velocities = states[:, :3], states[:, 3:]
+    pieces = [(accelerations, velocities[:-1], positions[:-1], durations)]
+    if stop_time > 0.0:
+        stopped = positions[-1] + 0.5 * end_velocity * stop_time
+        _check_stop(world, positions[-1], stopped, float(np.linalg.norm(end_velocity)))
+        pieces.append((stop[None], end_velocity[None], positions[-1][None],
+                       np.array([stop_time])))
+        waypoints = np.vstack([positions, stopped])
+    else:
+        waypoints = positions
+    acceleration, velocity, position, duration = (np.concatenate(part) for part in
+                                                  zip(*pieces, strict=True))
+    coefficients = np.stack([0.5 * acceleration, velocity, position])  # (3, pieces, 3)
+    breaks = np.concatenate([[0.0], np.cumsum(duration)])
+    return Trajectory(PPoly(coefficients, breaks), waypoints, METHOD,
+                      yaw_mode=YawMode.CONSTANT, yaw0=model.yaw,
+                      info={"controls": len(durations), "stop_s": stop_time,
+                            "stop_acceleration_m_s2": float(np.linalg.norm(stop))},
+                      leg_segments=(result.leg_controls, 0))
+
+
+def _check_stop(world: World | None, end: np.ndarray, stopped: np.ndarray,
+                speed: float) -> None:
+    """Refuse a stop from ``end`` to ``stopped`` (3,) m that leaves ``world`` inflated by
+    its margin (nothing to check without a world)."""
+    if world is None:
+        return
+    margin = world.margin or 0.0
+    if not world.inflate(margin).segment_free(end, stopped):
+        where = ", ".join(f"{v:.3g}" for v in end)
+        raise QuadnavError(
+            f"the plan ends at ({where}) moving at {speed:.2f} m/s, and the "
+            f"{np.linalg.norm(stopped - end):.2f} m it needs to stop do not keep the "
+            f"{margin:g} m margin; plan again with another --seed")
+
+
+@dataclass(frozen=True, eq=False)
+class KinoFlight:
+    """A kinodynamic plan and its closed-loop flight.
+
+    Attributes:
+        world: the map flown, with the start, goal and margin of the plan.
+        result: the plan (solved).
+        model: the point mass it was planned for.
+        search: the planner's settings.
+        trajectory: the plan as flown (:func:`plan_trajectory`).
+        flight: the simulated flight.
+        vehicle: the simulated quadrotor.
+        gains: the cascade's gains (used by the ``cascade`` controller).
+        controller: the controller's registered name.
+        settings: the simulation's settings.
+    """
+
+    world: World
+    result: KinoResult
+    model: SampledQuadrotor
+    search: KinoSettings
+    trajectory: Trajectory
+    flight: Flight
+    vehicle: VehicleParams
+    gains: Gains
+    controller: str
+    settings: SimSettings
+
+    @property
+    def success(self) -> bool:
+        """The flight ran to the end with no contact and stopped where the plan stops."""
+        return flight_succeeded(self.flight, self.settings.goal_tolerance)
+
+    def metrics(self) -> dict:
+        """JSON-ready summary, with the keys of a ``fly`` run's ``metrics.json`` that
+        apply (no geometric path: ``path_length_m`` is the planned flight's length)."""
+        world, result, trajectory = self.world, self.result, self.trajectory
+        positions = result.states[:, :3]
+        return {
+            "success": self.success,
+            "map": world.name,
+            "start": world.start.tolist(),
+            "goal": world.goal.tolist(),
+            "margin_m": world.margin,
+            "planner": f"kinodynamic {result.planner}",
+            "seed": result.seed,
+            "vehicle": self.vehicle.name,
+            "controller": self.controller,
+            "speed_m_s": self.model.speed_limit,
+            "path_found": True,
+            "path_length_m": float(np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()),
+            "path_vertices": len(positions),
+            "planning_time_s": result.seconds,
+            "plan_duration_s": result.duration,
+            "stop_s": trajectory.info["stop_s"],
+            "trajectory_duration_s": trajectory.duration,
+            "goal_distance_m": float(np.linalg.norm(self.flight.position[-1] - world.goal)),
+        } | measure_flight(world, trajectory, self.flight, self.settings)
+
+    def parameters(self) -> dict:
+        """Every setting the plan and the flight ran with, JSON-ready."""
+        return {
+            "map": self.world.name, "start": self.world.start.tolist(),
+            "goal": self.world.goal.tolist(), "margin_m": self.world.margin,
+            "planner": f"kinodynamic {self.result.planner}",
+            "kinodynamic": as_plain(self.search), "model": as_plain(self.model),
+            "vehicle": as_plain(self.vehicle), "gains": as_plain(self.gains),
+            "controller": self.controller, "simulation": as_plain(self.settings),
+        }
+
+
+def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
+                  search: KinoSettings, vehicle: VehicleParams | None = None,
+                  gains: Gains | None = None, settings: SimSettings | None = None,
+                  controller: str = DEFAULT_CONTROLLER,
+                  progress: Callable[[float], None] | None = None) -> KinoFlight:
+    """Fly the solved plan ``result`` closed loop (see the module docstring).
+
+    Args:
+        world: the real map, with the plan's start, goal and margin.
+        result: a solved quadrotor plan.
+        model: the point mass it was planned for.
+        search: the planner's settings (recorded).
+        vehicle: the simulated quadrotor (default: the ``tello`` preset, the 80 g vehicle
+            the default model stands for).
+        gains: the cascade's gains (default: those tuned for the vehicle).
+        settings: rates, goal tolerance, disturbances, seed.
+        controller: a name of :data:`~quadnav.control.registry.CONTROLLERS`.
+        progress: called with the fraction of the flight simulated.
+
+    Raises:
+        QuadnavError: the plan's stop would not keep the margin (:func:`plan_trajectory`).
+    """
+    vehicle = vehicle or load_params()
+    gains = gains or load_gains(preset=vehicle.gains)
+    settings = settings or SimSettings()
+    trajectory = plan_trajectory(result, model, world)
+    flight = simulate(trajectory, vehicle, gains, world, settings, progress,
+                      controller=CONTROLLERS.get(controller)(gains))
+    return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,
+                      controller, settings)
+
