@@ -30,6 +30,8 @@ from quadnav.viz.flight_figures import (
     flight_states_figure,
     tracking_error_figure,
 )
+from quadnav.viz.plan_figure import MAX_TREE_EDGES
+from quadnav.viz.style import TREE_COLOR
 from quadnav.world import load_world
 
 SETTINGS = MissionSettings(planning=PlannerSettings(seed=0, max_iterations=3000, time_limit=30))
@@ -142,7 +144,11 @@ def test_3d_figure_shows_an_oblique_3d_view_and_a_2d_top_view(run):
         assert np.array_equal(points(ax, "path"), run.path[:, :columns])
         assert line(ax, "path").get_color() == "red"
         assert_outlined(line(ax, "path"))
-        assert len(ax.collections) >= 2  # blocks and the tree, at least
+        assert len(ax.collections) >= 1  # the blocks
+        tree = [drawn for drawn in ax.get_lines() if drawn.get_color() == TREE_COLOR]
+        assert len(tree) == 1  # one line, pen lifted between edges (NaN rows)
+        xs = tree[0].get_data_3d()[0] if columns == 3 else tree[0].get_xdata()
+        assert np.isnan(xs).sum() == min(len(run.tree_edges()), MAX_TREE_EDGES) - 1
         assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
     aspect = oblique.get_box_aspect()  # a metre is as long along every axis
     assert np.allclose(aspect / aspect[0], run.world.extent / run.world.extent[0])

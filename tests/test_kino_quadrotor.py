@@ -12,7 +12,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined
-from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic import KinoResult, KinoSettings
@@ -26,7 +25,13 @@ from quadnav.kinodynamic.quadrotor import (
 )
 from quadnav.planning import make_problem
 from quadnav.viz.figures import save_figure
-from quadnav.viz.kino3d import MAX_TREE_SEGMENTS, quadrotor_controls_figure, quadrotor_figure
+from quadnav.viz.kino3d import (
+    MAX_TREE_SEGMENTS,
+    TREE_PIECES,
+    quadrotor_controls_figure,
+    quadrotor_figure,
+)
+from quadnav.viz.style import TREE_COLOR
 from quadnav.world import World, load_world
 
 MODEL = SampledQuadrotor()
@@ -343,11 +348,11 @@ def test_disconnected_start_and_goal_is_a_user_error():
 def test_figures_draw_the_tree_the_flight_and_the_controls(forest, forest_plan, tmp_path):
     fig = quadrotor_figure(forest, forest_plan, MODEL, goal=forest.goal)
     ax = fig.axes[0]
-    fig.canvas.draw()  # 3D collections hold their 2D segments once projected
-    tree = [c for c in ax.collections if isinstance(c, Line3DCollection)]
-    assert len(tree) == 1
-    assert len(tree[0].get_segments()) == min(4 * (len(forest_plan.tree_states) - 1),
-                                              MAX_TREE_SEGMENTS)
+    tree = [drawn for drawn in ax.get_lines() if drawn.get_color() == TREE_COLOR]
+    assert len(tree) == 1  # one line through every edge's chords, the pen lifted between
+    x = tree[0].get_data_3d()[0]
+    edges = min(len(forest_plan.tree_states) - 1, MAX_TREE_SEGMENTS // TREE_PIECES)
+    assert np.isnan(x).sum() == edges - 1 and len(x) == edges * (TREE_PIECES + 2) - 1
     flight = ax.get_lines()[-1]
     assert np.allclose(np.array(flight.get_data_3d()).T[[0, -1]],
                        forest_plan.states[[0, -1], :3])

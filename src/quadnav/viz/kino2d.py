@@ -11,7 +11,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.collections import LineCollection, PatchCollection
+from matplotlib.collections import PatchCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Rectangle
 from numpy.typing import ArrayLike
@@ -25,6 +25,7 @@ from quadnav.kinodynamic.diffdrive import (
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.world2d import World2D
 from quadnav.viz.layout import finish
+from quadnav.viz.lines import draw_polylines
 from quadnav.viz.style import GOAL_COLOR, PATH_COLOR, START_COLOR, TREE_COLOR, outlined
 from quadnav.viz.topview import WIDE
 
@@ -84,8 +85,8 @@ def draw_diffdrive(ax: Axes, world: World2D, result: KinoResult, model: DiffDriv
         parents = result.tree_states[result.tree_parents[shown]]
         arcs = arc_samples(parents, result.tree_controls[shown], result.tree_durations[shown],
                            TREE_EDGE_CHORDS)
-        ax.add_collection(LineCollection(arcs[..., :2], colors=[TREE_COLOR], linewidths=0.4,
-                                         label=f"tree ({count:,} edges)"))
+        draw_polylines(ax, arcs, color=TREE_COLOR, linewidth=0.4,
+                       label=f"tree ({count:,} edges)")
     if result.solved:
         centre, left, right, _ = wheel_tracks(result, model, 1e-3 * float(np.max(world.extent)))
         ax.plot(*left.T, color=LEFT_COLOR, linewidth=0.7, label="left wheel")

@@ -10,13 +10,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from mpl_toolkits.mplot3d.art3d import Line3DCollection
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.viz.layout import finish
+from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world, map_legend
 from quadnav.viz.style import FLOWN_COLOR, PATH_COLOR, TREE_COLOR, outlined
 from quadnav.viz.thinning import evenly_spread
@@ -63,9 +63,7 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
         points = _motions(model, result.tree_states[result.tree_parents[shown]],
                           result.tree_controls[shown], result.tree_durations[shown],
                           TREE_PIECES)
-        chords = np.stack([points[:, :-1], points[:, 1:]], axis=2).reshape(-1, 2, 3)
-        ax.add_collection3d(Line3DCollection(chords, colors=[TREE_COLOR], linewidths=0.4,
-                                             zorder=5))
+        draw_polylines(ax, points, color=TREE_COLOR, linewidth=0.4, zorder=5)
         label = f"tree ({children.size:,} edges" + (
             f", {shown.size:,} drawn)" if shown.size < children.size else ")")
         handles.append(Line2D([], [], color=TREE_COLOR[:3], label=label))

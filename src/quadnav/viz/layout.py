@@ -243,4 +243,5 @@ def finish(fig: Figure) -> Figure:
                 _rearrange(fig, pairs, moves)
             elif settled:
                 break
+    fig.set_layout_engine("none")  # the layout is final: saving need not compute it again
     return fig

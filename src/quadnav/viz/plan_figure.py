@@ -5,15 +5,13 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from mpl_toolkits.mplot3d import Axes3D
-from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
 from quadnav.viz.layout import finish
+from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world, map_legend
 from quadnav.viz.style import PATH_COLOR, TREE_COLOR, outlined
 from quadnav.viz.thinning import evenly_spread
@@ -30,12 +28,7 @@ def draw_tree(ax: Axes, edges: np.ndarray) -> Line2D | None:
     if not len(edges):
         return None
     shown = evenly_spread(edges, MAX_TREE_EDGES)
-    if isinstance(ax, Axes3D):
-        ax.add_collection3d(Line3DCollection(shown, colors=[TREE_COLOR], linewidths=0.4,
-                                             zorder=5))
-    else:
-        ax.add_collection(LineCollection(shown[..., :2], colors=[TREE_COLOR], linewidths=0.4,
-                                         zorder=5))
+    draw_polylines(ax, shown, color=TREE_COLOR, linewidth=0.4, zorder=5)
     label = f"tree ({len(edges):,} edges" + (
         f", {len(shown):,} drawn)" if len(shown) < len(edges) else ")")
     return Line2D([], [], color=TREE_COLOR[:3], label=label)

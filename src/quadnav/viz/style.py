@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from matplotlib.patheffects import AbstractPathEffect, Normal, Stroke
 
-TREE_COLOR = (0.35, 0.55, 0.85, 0.35)
+TREE_COLOR = (0.35, 0.55, 0.85, 0.6)
 PATH_COLOR = "red"
 START_COLOR = "red"
 GOAL_COLOR = "green"
