@@ -8,23 +8,25 @@ from pathlib import Path
 
 from quadnav.cli.args import (
     acceleration,
-    add_controller_argument,
     add_map_argument,
     add_margin_argument,
     add_planner_arguments,
     add_run_output_arguments,
-    add_simulation_arguments,
     add_start_goal_arguments,
-    add_timing_arguments,
-    add_vehicle_arguments,
     planner_budget,
     resolve_margin,
     resolve_start_goal,
-    simulation_settings,
     speed_or_max,
-    vehicle_and_gains,
 )
 from quadnav.cli.commands import command_help
+from quadnav.cli.flight_args import (
+    add_controller_argument,
+    add_simulation_arguments,
+    add_timing_arguments,
+    add_vehicle_arguments,
+    simulation_settings,
+    vehicle_and_gains,
+)
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.limits import ACCELERATION, SPEED

@@ -42,10 +42,8 @@ from tqdm import tqdm
 
 from quadnav.arrays import FloatArray
 from quadnav.cli.args import (
-    add_controller_argument,
     add_margin_argument,
     add_start_goal_arguments,
-    add_vehicle_arguments,
     coordinate,
     length,
     margin_value,
@@ -53,9 +51,13 @@ from quadnav.cli.args import (
     plan_time,
     resolve_margin,
     seed_value,
-    vehicle_and_gains,
 )
 from quadnav.cli.commands import command_help
+from quadnav.cli.flight_args import (
+    add_controller_argument,
+    add_vehicle_arguments,
+    vehicle_and_gains,
+)
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor

@@ -7,16 +7,18 @@ import argparse
 import sys
 
 from quadnav.cli.args import (
-    add_controller_argument,
     add_run_output_arguments,
     add_seed_argument,
+    number_in,
+)
+from quadnav.cli.commands import command_help
+from quadnav.cli.flight_args import (
+    add_controller_argument,
     add_simulation_arguments,
     add_vehicle_arguments,
-    number_in,
     simulation_settings,
     vehicle_and_gains,
 )
-from quadnav.cli.commands import command_help
 from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError

@@ -9,12 +9,14 @@ from quadnav.cli.args import (
     acceleration,
     add_map_argument,
     add_margin_argument,
-    add_timing_arguments,
     number_in,
     resolve_margin,
     speed,
 )
 from quadnav.cli.commands import command_help
+from quadnav.cli.flight_args import (
+    add_timing_arguments,
+)
 from quadnav.limits import (
     ACCELERATION,
     MAX_DURATION,
