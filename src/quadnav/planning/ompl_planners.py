@@ -114,7 +114,7 @@ class _ExactMotionValidator(ob.MotionValidator):
 
     def __init__(self, si: ob.SpaceInformation, world: World) -> None:
         super().__init__(si)
-        self._grid = world._block_grid
+        self._grid = world.block_grid
         self._p = np.empty(3)
         self._q = np.empty(3)
 
@@ -138,7 +138,7 @@ def _space_information(world: World) -> ob.SpaceInformation:
     bounds.high = world.upper.tolist()
     space.setBounds(bounds)
     si = ob.SpaceInformation(space)
-    grid = world._block_grid
+    grid = world.block_grid
     # Compile the checks (or load them from numba's cache) now, not inside a timed search.
     grid_point_free(*world.lower, grid)
     grid_segment_free(np.array(world.lower), np.array(world.upper), grid)

@@ -2,7 +2,8 @@
 
 :func:`shortcut_path` never introduces a collision (every output segment passes the
 exact :meth:`~quadnav.world.model.World.segments_free` check), keeps both endpoints
-exactly and never makes the path longer. :func:`free_polyline` and
+exactly and never makes the path longer. Its loops are compiled
+(:mod:`quadnav.planning.refine_kernel`). :func:`free_polyline` and
 :func:`polyline_segments` are the input check and the segment view it shares with
 :mod:`quadnav.planning.smoothing`.
 """
@@ -14,7 +15,8 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.planning.result import distinct, path_length
+from quadnav.planning.refine_kernel import line_of_sight, random_shortcuts
+from quadnav.planning.result import path_length
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
@@ -87,11 +89,14 @@ def shortcut_path(world: World, path: ArrayLike, seed: int = 0,
         raise QuadnavError(f"shortcut attempts must be >= 0, got {attempts}")
     if len(points) < 3:
         return points
-    shorter = _line_of_sight(world, points)
+    grid = world.block_grid
+    shorter = line_of_sight(points, grid)
     if attempts is None:
         attempts = max(MIN_ATTEMPTS, ATTEMPTS_PER_VERTEX * len(shorter))
-    shorter = _random_shortcuts(world, shorter, np.random.default_rng(seed), attempts)
-    shorter = _line_of_sight(world, shorter)
+    uniforms = np.random.default_rng(seed).random(2 * attempts)
+    shorter = random_shortcuts(shorter, grid, uniforms, RANGE_RATIO, SNAP_FRACTION,
+                               RELATIVE_EPSILON)
+    shorter = line_of_sight(shorter, grid)
     # Each step is shorter in exact arithmetic; rounding in the sums must not undo that.
     return shorter if path_length(shorter) <= path_length(points) else points
 
@@ -99,69 +104,3 @@ def shortcut_path(world: World, path: ArrayLike, seed: int = 0,
 def polyline_segments(points: FloatArray) -> FloatArray:
     """The (N - 1, 2, 3) segments of a polyline (N, 3)."""
     return np.stack([points[:-1], points[1:]], axis=1)
-
-
-def _line_of_sight(world: World, points: FloatArray) -> FloatArray:
-    """Greedy pass: from each kept vertex, the farthest later vertex it sees is kept next.
-
-    The candidates of one vertex are tested in one batch; the next vertex always sees
-    its neighbour, since the input's segments are free.
-    """
-    kept = [0]
-    last = len(points) - 1
-    while kept[-1] < last - 1:
-        here = kept[-1]
-        later = np.arange(here + 2, last + 1)
-        pairs = np.stack([np.broadcast_to(points[here], (len(later), 3)), points[later]],
-                         axis=1)
-        visible = later[world.segments_free(pairs)]
-        kept.append(int(visible[-1]) if visible.size else here + 1)
-    if kept[-1] != last:
-        kept.append(last)
-    return points[kept]
-
-
-def _random_shortcuts(world: World, points: FloatArray, rng: np.random.Generator,
-                      attempts: int) -> FloatArray:
-    """Try ``attempts`` random shortcuts between points along the polyline (N, 3)."""
-    for _ in range(attempts):
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0),
-                                                              axis=1))])
-        total = arc[-1]
-        s0 = rng.uniform(0.0, total)
-        s1 = rng.uniform(max(0.0, s0 - RANGE_RATIO * total),
-                         min(total, s0 + RANGE_RATIO * total))
-        s0, s1 = min(s0, s1), max(s0, s1)
-        i0, s0, p0 = _point_at(points, arc, s0)
-        i1, s1, p1 = _point_at(points, arc, s1)
-        # The path between p0 (on segment i0) and p1 (on segment i1) turns only at the
-        # vertices i0 + 1 .. i1; on one segment there is nothing to cut.
-        if i0 >= i1:
-            continue
-        saved = (s1 - s0) - float(np.linalg.norm(p1 - p0))
-        if saved <= RELATIVE_EPSILON * total or not world.segment_free(p0, p1):
-            continue
-        spliced = np.concatenate([points[:i0 + 1], [p0, p1], points[i1 + 1:]])
-        # The pieces of segments i0 and i1 kept are free in exact arithmetic, but p0 and
-        # p1 are rounded: near a tangency a piece can touch a block, so check them too.
-        # (Checked one by one: a batch this small costs more to spread over threads.)
-        if world.segment_free(spliced[i0], p0) and world.segment_free(p1, spliced[i0 + 3]):
-            points = distinct(spliced)
-    return points
-
-
-def _point_at(points: FloatArray, arc: FloatArray, s: float
-              ) -> tuple[int, float, FloatArray]:
-    """(segment index, distance along the path, point) for the point ``s`` metres along
-    the polyline (N, 3) whose cumulative lengths are ``arc`` (N,).
-
-    A point within :data:`SNAP_FRACTION` of the length from a vertex is that vertex,
-    given as the end of the segment before it (the start of the first segment for
-    vertex 0), so that cutting a corner leaves no tiny segment.
-    """
-    nearest = int(np.argmin(np.abs(arc - s)))
-    if abs(arc[nearest] - s) <= SNAP_FRACTION * arc[-1]:
-        return max(nearest - 1, 0), float(arc[nearest]), points[nearest].copy()
-    i = int(np.clip(np.searchsorted(arc, s, side="right") - 1, 0, len(points) - 2))
-    t = (s - arc[i]) / (arc[i + 1] - arc[i])
-    return i, s, points[i] + t * (points[i + 1] - points[i])

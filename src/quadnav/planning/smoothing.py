@@ -16,10 +16,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.config import require
+from quadnav.planning.refine_kernel import simplified, smoothing_sweeps
 from quadnav.planning.result import IntArray, path_length
 from quadnav.planning.shortcut import free_polyline, polyline_segments
 from quadnav.world.model import World
@@ -70,7 +71,8 @@ def smooth_path(world: World, path: ArrayLike, weight_data: float = 0.5,
         return points
     spacing = max_spacing if max_spacing is not None else length / DEFAULT_PIECES
     original = _densify(world, points, spacing)
-    smoothed = _descend(world, original, weight_data, weight_smooth, tolerance, max_sweeps)
+    smoothed = smoothing_sweeps(original, world.block_grid, weight_data, weight_smooth,
+                                tolerance, max_sweeps)
     return simplify_path(world, smoothed, KEEP_DEVIATION_FRACTION * spacing)
 
 
@@ -84,28 +86,7 @@ def simplify_path(world: World, path: FloatArray, deviation: float) -> FloatArra
     """
     if len(path) < 3:
         return path
-    keep = np.zeros(len(path), dtype=bool)
-    keep[[0, -1]] = True
-    runs = [(0, len(path) - 1)]
-    while runs:
-        first, last = runs.pop()
-        if last - first < 2:
-            continue
-        distances = _distances_to_segment(path[first + 1:last], path[first], path[last])
-        farthest = first + 1 + int(np.argmax(distances))
-        if distances.max() <= deviation and world.segment_free(path[first], path[last]):
-            continue
-        keep[farthest] = True
-        runs += [(first, farthest), (farthest, last)]
-    return path[keep]
-
-
-def _distances_to_segment(points: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
-    """Distance (K,) from each point (K, 3) to the closed segment a -> b, metres."""
-    d = b - a
-    squared = float(d @ d)
-    t = np.zeros(len(points)) if squared == 0.0 else np.clip((points - a) @ d / squared, 0, 1)
-    return np.linalg.norm(points - (a + t[:, None] * d), axis=1)
+    return path[simplified(path, world.block_grid, deviation)]
 
 
 def _check_arguments(weight_data: float, weight_smooth: float, tolerance: float,
@@ -149,41 +130,3 @@ def _cut(points: FloatArray, pieces: IntArray) -> tuple[FloatArray, IntArray]:
     t = (np.arange(len(segment)) - first) / pieces[segment]
     cut = points[segment] + t[:, None] * (points[segment + 1] - points[segment])
     return np.concatenate([cut, points[-1:]]), segment
-
-
-def _descend(world: World, original: FloatArray, weight_data: float, weight_smooth: float,
-             tolerance: float, max_sweeps: int) -> FloatArray:
-    """Sweeps of the smoother on the free polyline ``original`` (N, 3), reverting and
-    freezing points whose segments would collide; the endpoints never move."""
-    path = original.copy()
-    frozen = np.zeros(len(path), dtype=bool)
-    frozen[[0, -1]] = True
-    interior = np.arange(1, len(path) - 1)
-    for _ in range(max_sweeps):
-        before = path.copy()
-        for parity in (1, 0):
-            i = interior[(interior % 2 == parity) & ~frozen[interior]]
-            path[i] += (weight_data * (original[i] - path[i])
-                        + weight_smooth * (path[i - 1] + path[i + 1] - 2 * path[i]))
-        _revert_collisions(world, path, before, frozen)
-        if np.linalg.norm(path - before, axis=1).sum() < tolerance:
-            break
-    return path
-
-
-def _revert_collisions(world: World, path: FloatArray, before: FloatArray,
-                       frozen: NDArray[np.bool_]) -> None:
-    """Put back (and freeze) the moved points of every segment of ``path`` that collides,
-    until none does; ``before`` (same shape) is the free polyline before the sweep."""
-    moved = np.any(path != before, axis=1)
-    touched = np.flatnonzero(moved[:-1] | moved[1:])
-    while touched.size:
-        hit = touched[~world.segments_free(np.stack([path[touched], path[touched + 1]],
-                                                     axis=1))]
-        ends = np.concatenate([hit, hit + 1])
-        path[ends] = before[ends]
-        moved[ends] = False
-        frozen[ends] = True
-        # Only segments beside a point just put back can newly collide.
-        touched = np.intersect1d(np.concatenate([ends - 1, ends]),
-                                 np.flatnonzero(moved[:-1] | moved[1:]))

@@ -195,19 +195,20 @@ class World:
         return geometry.point_free(x, y, z, self._blocks_by_coordinate, self.boundary)
 
     @cached_property
-    def _block_grid(self) -> blockgrid.GridArrays:
-        """The blocks sorted into a uniform grid, for fast segment checks."""
+    def block_grid(self) -> blockgrid.GridArrays:
+        """The blocks sorted into a uniform grid, for fast segment checks (a
+        :data:`~quadnav.world.blockgrid.GridArrays` tuple that compiled code takes)."""
         return blockgrid.build_block_grid(self)
 
     def segments_free(self, segments: ArrayLike) -> NDArray[np.bool_]:
         """Whether each closed segment (N, 2, 3) lies wholly in free space -> bool (N,)."""
-        return blockgrid.grid_segments_free(_segments(segments), self._block_grid)
+        return blockgrid.grid_segments_free(_segments(segments), self.block_grid)
 
     def segment_free(self, start: ArrayLike, end: ArrayLike) -> bool:
         """Whether the closed segment start -> end (each (3,)) lies wholly in free space."""
         p = np.array(start, dtype=np.float64)
         q = np.array(end, dtype=np.float64)
-        return blockgrid.grid_segment_free(p, q, self._block_grid)
+        return blockgrid.grid_segment_free(p, q, self.block_grid)
 
     def clearances(self, points: ArrayLike) -> FloatArray:
         """Signed clearance (N,) of points (N, 3), metres.
@@ -269,7 +270,7 @@ class World:
             return FreeVolume(1.0 - occupied / float(np.prod(self.extent)), 0.0)
         rng = np.random.default_rng(ESTIMATE_SEED)
         points = rng.uniform(self.lower, self.upper, (ESTIMATE_POINTS, 3))
-        fraction = float(np.mean(blockgrid.grid_points_free(points, self._block_grid)))
+        fraction = float(np.mean(blockgrid.grid_points_free(points, self.block_grid)))
         spread = max(fraction * (1.0 - fraction), 1.0 / ESTIMATE_POINTS)
         return FreeVolume(fraction, 2.0 * float(np.sqrt(spread / ESTIMATE_POINTS)))
 
