@@ -96,7 +96,7 @@ def test_plans_on_the_built_in_worlds_fly_closed_loop_over_ten_seeds(world_spec)
         assert metrics["rotor_energy_j"] > 0
 
 
-def test_kino_fly_writes_a_run_folder_every_viewer_reads(tmp_path, capsys):
+def test_kino_fly_writes_the_run_folder_fly_writes(tmp_path, capsys):
     out = tmp_path / "kino"
     code = main(["kino", "quadrotor", "forest:seed=1", "--fly", "--controller", "se3",
                  "--quiet", "-o", str(out)])
@@ -113,8 +113,6 @@ def test_kino_fly_writes_a_run_folder_every_viewer_reads(tmp_path, capsys):
     assert len(run.tree_nodes) == kino["nodes"]
     for name in ("flight_3d.png", "tracking_error.png", "report.html"):
         assert (out / "flight" / name).stat().st_size > 1000
-    assert main(["view", str(out / "flight")]) == 0
-    assert main(["report", str(out / "flight")]) == 0
 
 
 def test_a_bad_vehicle_file_is_refused_before_planning(tmp_path, capsys):
