@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import os
+import subprocess
 import sys
+import tempfile
+import threading
 from pathlib import Path
 
 import pytest
@@ -17,6 +20,39 @@ settings.load_profile("quadnav")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 SHARED_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
+
+#: Commands that compile (or load from numba's cache) the kernels most tests share, in two
+#: chains run side by side: planning, refinement and the trajectory stage; the closed loop.
+WARM_UP = (
+    (("plan", "--first", "--quiet", "-o", "{tmp}/plan"),
+     ("traj", "forest", "--path", "{tmp}/plan/path.csv", "-o", "{tmp}/plan")),
+    (("track", "hover:duration=1", "--no-figures", "--quiet", "-o", "{tmp}/track"),),
+)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Before the xdist workers start, compile the shared kernels once, on both cores.
+
+    On a fresh install numba has nothing cached, and every worker would compile the same
+    kernels for its first tests at the same time (about 40 s of CPU each). Compiled here
+    once, in two processes side by side, the workers load them from the cache instead. A
+    warm cache makes this a few seconds of loading. It is a speed-up only: a failure here
+    is ignored, and the tests that need the kernels compile them themselves."""
+    if hasattr(config, "workerinput") or not config.getoption("numprocesses", None):
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        chains = [threading.Thread(target=_run_chain, args=(chain, tmp)) for chain in WARM_UP]
+        for chain in chains:
+            chain.start()
+        for chain in chains:
+            chain.join()
+
+
+def _run_chain(chain: tuple[tuple[str, ...], ...], tmp: str) -> None:
+    """Run each ``quadnav`` command of ``chain`` in turn, output discarded."""
+    for command in chain:
+        subprocess.run([sys.executable, "-m", "quadnav", *(arg.format(tmp=tmp) for arg in command)],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
 
 
 @pytest.fixture
