@@ -212,7 +212,8 @@ def finish(folder: Path, map_name: str, runs: Sequence[tuple[str, KinoResult]],
     print("wrote " + ", ".join(str(folder / name) for name in written))
     result = runs[0][1]
     if not result.solved:
-        print(f"quadnav: no plan: {result.message}", file=sys.stderr)
+        print(f"quadnav: no plan: {result.message}; a larger --iterations or --time may "
+              "reach it", file=sys.stderr)
         return EXIT_NOT_REACHED
     return 0
 
