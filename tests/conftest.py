@@ -22,11 +22,14 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 SHARED_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 
 #: Commands that compile (or load from numba's cache) the kernels most tests share, in two
-#: chains run side by side: planning, refinement and the trajectory stage; the closed loop.
+#: chains run side by side: planning, refinement and the trajectory stage; the closed loop
+#: with each controller (the loop is compiled once per controller).
 WARM_UP = (
     (("plan", "--first", "--quiet", "-o", "{tmp}/plan"),
      ("traj", "forest", "--path", "{tmp}/plan/path.csv", "-o", "{tmp}/plan")),
-    (("track", "hover:duration=1", "--no-figures", "--quiet", "-o", "{tmp}/track"),),
+    (("track", "hover:duration=1", "--no-figures", "--quiet", "-o", "{tmp}/track"),
+     ("track", "hover:duration=1", "--controller", "se3", "--no-figures", "--quiet", "-o",
+      "{tmp}/se3")),
 )
 
 
