@@ -160,13 +160,8 @@ def _revert_collisions(world: World, path: FloatArray, before: FloatArray,
                                  np.flatnonzero(moved[:-1] | moved[1:]))
 
 def simplify_path(world: World, path: FloatArray, deviation: float) -> FloatArray:
-    """Drop vertices of a free polyline (N, 3) that lie within ``deviation`` metres of
-    the straight segment replacing them, where that segment is free in ``world``.
-
-    Ramer-Douglas-Peucker with a collision check: a run of vertices is replaced by its
-    chord when every vertex in it lies within ``deviation`` of the chord and the chord
-    is free; otherwise the run is split at its farthest vertex. Endpoints are kept.
-    """
+    """The former numpy :func:`quadnav.planning.smoothing.simplify_path` (same rule: a run
+    of vertices within ``deviation`` m of its free chord is replaced by the chord)."""
     if len(path) < 3:
         return path
     keep = np.zeros(len(path), dtype=bool)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.interpolate import PPoly
@@ -37,12 +38,14 @@ from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.mission import flight_succeeded, measure_flight
+from quadnav.planning.result import path_length
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.model import Trajectory, YawMode
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
+from quadnav.world.placement import format_point
 
 #: Largest deceleration of the stop that ends the trajectory, m/s^2 (the default model
 #: brakes at up to 3.6 m/s^2 horizontally, g tan 0.35 rad).
@@ -87,16 +90,16 @@ def plan_trajectory(result: KinoResult, model: SampledQuadrotor,
     """
     if not result.solved:
         raise QuadnavError(f"no plan to fly: {result.message}")
-    states, durations = result.states, result.durations
-    accelerations = np.diff(states[:, 3:], axis=0) / durations[:, None]
-    end_velocity = states[-1, 3:]
+    positions, velocities, durations = result.states[:, :3], result.states[:, 3:], result.durations
+    accelerations = np.diff(velocities, axis=0) / durations[:, None]
+    end_velocity = velocities[-1]
+    end_speed = float(np.linalg.norm(end_velocity))
     stop = stop_acceleration(model, end_velocity)
-    stop_time = float(np.linalg.norm(end_velocity) / np.linalg.norm(stop)) if stop.any() else 0.0
-    positions, velocities = states[:, :3], states[:, 3:]
+    stop_time = end_speed / float(np.linalg.norm(stop)) if stop.any() else 0.0
     pieces = [(accelerations, velocities[:-1], positions[:-1], durations)]
     if stop_time > 0.0:
         stopped = positions[-1] + 0.5 * end_velocity * stop_time
-        _check_stop(world, positions[-1], stopped, float(np.linalg.norm(end_velocity)))
+        _check_stop(world, positions[-1], stopped, end_speed)
         pieces.append((stop[None], end_velocity[None], positions[-1][None],
                        np.array([stop_time])))
         waypoints = np.vstack([positions, stopped])
@@ -121,9 +124,8 @@ def _check_stop(world: World | None, end: np.ndarray, stopped: np.ndarray,
         return
     margin = world.margin or 0.0
     if not world.inflate(margin).segment_free(end, stopped):
-        where = ", ".join(f"{v:.3g}" for v in end)
         raise QuadnavError(
-            f"the plan ends at ({where}) moving at {speed:.2f} m/s, and the "
+            f"the plan ends at {format_point(end)} moving at {speed:.2f} m/s, and the "
             f"{np.linalg.norm(stopped - end):.2f} m it needs to stop do not keep the "
             f"{margin:g} m margin; plan again with another --seed")
 
@@ -178,14 +180,20 @@ class KinoFlight:
             "controller": self.controller,
             "speed_m_s": self.model.speed_limit,
             "path_found": True,
-            "path_length_m": float(np.linalg.norm(np.diff(positions, axis=0), axis=1).sum()),
+            "path_length_m": path_length(positions),
             "path_vertices": len(positions),
             "planning_time_s": result.seconds,
             "plan_duration_s": result.duration,
             "stop_s": trajectory.info["stop_s"],
             "trajectory_duration_s": trajectory.duration,
             "goal_distance_m": float(np.linalg.norm(self.flight.position[-1] - world.goal)),
-        } | measure_flight(world, trajectory, self.flight, self.settings)
+        } | self.measured
+
+    @cached_property
+    def measured(self) -> dict:
+        """The flight's part of :meth:`metrics` (:func:`~quadnav.mission.measure_flight`:
+        the margins measured exactly, the tracking statistics), measured once."""
+        return measure_flight(self.world, self.trajectory, self.flight, self.settings)
 
     def parameters(self) -> dict:
         """Every setting the plan and the flight ran with, JSON-ready."""

@@ -27,6 +27,7 @@ from quadnav.cli.flight_args import (
     simulation_settings,
     vehicle_and_gains,
 )
+from quadnav.cli.flight_lines import min_clearance, tracking_errors
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.limits import ACCELERATION, SPEED
@@ -124,11 +125,7 @@ def print_summary(mission: Mission) -> None:
         return
     print(f"  path {m['path_length_m']:.2f} m, trajectory {m['trajectory_duration_s']:.2f} s, "
           f"flight {m['ending']} after {m['flight_time_s']:.2f} s")
-    clearance = m["min_clearance_m"]
-    print(f"  tracking error RMS {100 * m['rms_tracking_error_m']:.2f} cm, max "
-          f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
-          f"{100 * m['final_error_m']:.2f} cm; min clearance "
-          + ("none (no blocks)" if clearance is None else f"{clearance:.3f} m"))
+    print(f"  {tracking_errors(m)}; {min_clearance(m)}")
     legs = ("" if m["trajectory_leg_margin_m"] is None else
             f"; on the legs out of it {m['trajectory_leg_margin_m']:.3f} m")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the trajectory and "

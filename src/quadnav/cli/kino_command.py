@@ -337,7 +337,8 @@ def quadrotor(args: argparse.Namespace) -> int:
     flown = fly_plan(args, world.replace(start=start, goal=goal, margin=margin), result, model,
                      settings, vehicle, gains) if args.fly and result.solved else None
     if flown is not None:
-        data["flight"] = {key: flown.metrics()[key] for key in FLIGHT_KEYS}
+        flown_metrics = flown.metrics()
+        data["flight"] = {key: flown_metrics[key] for key in FLIGHT_KEYS}
     tables = plan_tables(result, ("x", "y", "z", "vx", "vy", "vz"),
                          dict(zip(("phi", "theta", "thrust"), result.controls.T, strict=True)))
     track = None if flown is None else flown.flight.position
@@ -367,6 +368,7 @@ def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
 def write_flight(flown: KinoFlight, folder: Path) -> int:
     """Write the run folder of the flight, print its headline figures; 0 when it
     succeeded, else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
+    from quadnav.cli.flight_lines import min_clearance, tracking_errors
     from quadnav.cli.fly_command import flight_failure
     from quadnav.report.run_writer import write_run
     from quadnav.runs import RunContent
@@ -376,15 +378,11 @@ def write_flight(flown: KinoFlight, folder: Path) -> int:
                          (result.tree_states[:, :3], result.tree_parents),
                          result.states[:, :3], flown.trajectory, flown.flight)
     written = write_run(content, folder)
-    clearance = m["min_clearance_m"]
     print(f"flown closed loop by the {flown.controller} controller on the {m['vehicle']} "
           f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
           f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, then a "
           f"{m['stop_s']:.2f} s stop)")
-    print(f"  tracking error RMS {100 * m['rms_tracking_error_m']:.2f} cm, max "
-          f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
-          f"{100 * m['final_error_m']:.2f} cm; min clearance "
-          + ("none (no blocks)" if clearance is None else f"{clearance:.3f} m"))
+    print(f"  {tracking_errors(m)}; {min_clearance(m)}")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
           f"rotor energy {m['rotor_energy_j']:.1f} J")

@@ -19,6 +19,7 @@ from quadnav.cli.flight_args import (
     simulation_settings,
     vehicle_and_gains,
 )
+from quadnav.cli.flight_lines import tracking_errors
 from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError
@@ -76,9 +77,7 @@ def _print_summary(m: dict) -> None:
 
     print(f"{m['reference']}: {'success' if m['success'] else 'FAILED'}, vehicle "
           f"{m['vehicle']}, flight {m['ending']} after {m['flight_time_s']:.2f} s")
-    print(f"  tracking error RMS {100 * m['rms_tracking_error_m']:.2f} cm, max "
-          f"{100 * m['max_tracking_error_m']:.2f} cm; final error "
-          f"{100 * m['final_error_m']:.2f} cm; max velocity error "
+    print(f"  {tracking_errors(m)}; max velocity error "
           f"{m['max_velocity_error_m_s']:.3f} m/s; mixer saturated "
           f"{100 * m['mixer_saturation']:.1f} % of steps")
     if "overshoot_percent" in m:
