@@ -4,20 +4,27 @@ Run: ``python bench/planning.py [--seeds 20] [--baseline-seeds N] [--json FILE]`
 ``python bench/planning.py --quick`` for a smoke run (3 seeds, short budgets).
 
 For each map (the public ``rbe595/map1.txt`` when ``../shared/maps`` is there, the
-built-in ``forest`` and a 100 x 100 x 20 m forest of about 800 trunks), with the same
-start, goal and 0.2 m margin for every planner, it prints medians over the seeds of:
+built-in ``forest`` and a 100 x 100 x 20 m forest of about 2,400 trunks), with the same
+start, goal, step, goal bias and 0.2 m margin for every planner, it prints medians over
+the seeds of:
 
 * the time to the first solution (``stats.time_to_first``, each planner stopping at its
-  first solution) of ours, OMPL's RRT* and the textbook baseline
-  (``bench/textbook_rrtstar.py``), and the ratios OMPL / ours and textbook / ours; a run
-  that finds nothing within its limit counts as "more than the limit";
+  first solution) of ours, compiled OMPL (``bench/ompl_rrtstar.cpp``: C++ RRT* with an
+  exact box checker, built against Debian's ``libompl-dev``; its column is left out, with
+  the reason, where that is not installed), OMPL through its Python bindings, and the
+  textbook baseline (``bench/textbook_rrtstar.py``), with the ratios against ours; a run
+  that finds nothing within its limit counts as "more than the limit". As OMPL measures
+  it, each planner's set-up (spatial indexes, arrays, OMPL's space information and
+  planner set-up) is outside the clock; it is reported in a table of its own;
 * the path length after a fixed budget, raw and post-processed: ours then
   :func:`quadnav.planning.refine.refine`, OMPL's then
   :func:`quadnav.planning.ompl_planners.simplify_ompl`, and the ratio OMPL / ours.
 
 Every planner with compiled code runs once on each map before the timed runs, so
 compilation is not counted; the textbook baseline is plain Python and needs no warm-up.
-Seeds interleave the planners so that a slow spell of the machine hits them alike.
+Seeds interleave the planners so that a slow spell of the machine hits them alike; the
+compiled driver runs as one process per seed (OMPL seeds its generator once per process)
+and times itself.
 """
 
 from __future__ import annotations
@@ -27,12 +34,13 @@ import json
 import math
 import statistics
 import sys
-import time
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from compiled_ompl import compiled_ompl, run_compiled, write_problem
 from textbook_rrtstar import plan_textbook
 
 from quadnav.planning import (
@@ -54,8 +62,8 @@ MARGIN = 0.2
 #: Seed of the warm-up runs, outside the range of the timed seeds.
 WARM_UP_SEED = 10**6
 
-#: Column labels; OMPL is OMPL's RRT*.
-OURS, OMPL, TEXTBOOK = "ours", "OMPL", "textbook"
+#: Column labels: OMPL is OMPL's RRT* through its Python bindings, OMPL_CPP compiled.
+OURS, OMPL_CPP, OMPL, TEXTBOOK = "ours", "OMPL C++", "OMPL py", "textbook"
 
 
 @dataclass(frozen=True)
@@ -104,22 +112,44 @@ class Figures:
         return self.values.get(f"{kind} {planner}", [])
 
 
-def _first(result: PlanResult) -> float:
-    """Time to first solution, s, or ``inf``."""
+@dataclass(frozen=True)
+class FirstRun:
+    """A run stopped at its first solution: the time to it and the set-up outside the
+    clock, s (``nan``: not measured), and the path's length, m (``inf``: none found)."""
+
+    first: float
+    setup: float
+    length: float
+
+
+def _first_run(result: PlanResult, setup_measured: bool = True) -> FirstRun:
+    """The figures of a :class:`PlanResult` stopped at its first solution."""
     found = result.stats.time_to_first
-    return math.inf if found is None else found
+    return FirstRun(math.inf if found is None else found,
+                    result.stats.setup_seconds if setup_measured else math.nan,
+                    result.length if result.solved else math.inf)
 
 
-def first_solution_runners(budgets: Budgets, with_ompl: bool
-                           ) -> dict[str, Callable[[PlanningProblem, int], PlanResult]]:
-    """Planner label -> ``run(problem, seed)`` that stops at the first solution."""
+def first_solution_runners(budgets: Budgets, with_ompl: bool, compiled: Path | None,
+                           problem_file: Path
+                           ) -> dict[str, Callable[[PlanningProblem, int], FirstRun]]:
+    """Planner label -> ``run(problem, seed)`` that stops at the first solution; the
+    compiled driver reads the problem from ``problem_file``."""
     def settings(seed: int, limit: float) -> PlannerSettings:
         return PlannerSettings(seed=seed, stop_at_first=True, time_limit=limit)
 
-    runners = {OURS: lambda p, s: plan(p, settings(s, budgets.first), "rrtstar")}
+    def ours(problem: PlanningProblem, seed: int) -> FirstRun:
+        return _first_run(plan(problem, settings(seed, budgets.first), "rrtstar"))
+
+    runners = {OURS: ours}
+    if compiled is not None:
+        runners[OMPL_CPP] = lambda p, s: FirstRun(
+            **vars(run_compiled(compiled, problem_file, p, s, budgets.first)))
     if with_ompl:
-        runners[OMPL] = lambda p, s: plan(p, settings(s, budgets.first), "ompl:RRTstar")
-    runners[TEXTBOOK] = lambda p, s: plan_textbook(p, settings(s, budgets.textbook))
+        runners[OMPL] = lambda p, s: _first_run(
+            plan(p, settings(s, budgets.first), "ompl:RRTstar"))
+    runners[TEXTBOOK] = lambda p, s: _first_run(
+        plan_textbook(p, settings(s, budgets.textbook)), setup_measured=False)
     return runners
 
 
@@ -141,14 +171,17 @@ def lengths_ompl(problem: PlanningProblem, seed: int, budget: float) -> tuple[fl
     return result.length, path_length(simplify_ompl(problem, result.path, seed=seed))
 
 
-def measure(case: Case, seeds: int, baseline_seeds: int, budgets: Budgets, with_ompl: bool
-            ) -> Figures:
-    """Run every planner on one map for the given numbers of seeds."""
+def measure(case: Case, seeds: int, baseline_seeds: int, budgets: Budgets, with_ompl: bool,
+            compiled: Path | None, scratch: Path) -> Figures:
+    """Run every planner on one map for the given numbers of seeds (the compiled
+    driver, when there is one, reads the problem from a file in ``scratch``)."""
     world = load_world(case.source)
     problem = make_problem(world, case.start, case.goal, MARGIN)
     figures = Figures(case.label, len(world.blocks),
                       float(np.linalg.norm(problem.goal - problem.start)))
-    runners = first_solution_runners(budgets, with_ompl)
+    problem_file = scratch / "problem.txt"
+    write_problem(problem, PlannerSettings(), problem_file)
+    runners = first_solution_runners(budgets, with_ompl, compiled, problem_file)
     length_runs = {OURS: lengths_ours}
     if with_ompl:
         length_runs[OMPL] = lengths_ompl
@@ -163,11 +196,10 @@ def measure(case: Case, seeds: int, baseline_seeds: int, budgets: Budgets, with_
         for name, run in runners.items():
             if name == TEXTBOOK and seed >= baseline_seeds:
                 continue
-            t0 = time.perf_counter()
-            result = run(problem, seed)
-            figures.add("first", name, _first(result))
-            figures.add("call", name, time.perf_counter() - t0)
-            figures.add("first length", name, result.length)
+            run_figures = run(problem, seed)
+            figures.add("first", name, run_figures.first)
+            figures.add("setup", name, run_figures.setup)
+            figures.add("first length", name, run_figures.length)
         for name, run in length_runs.items():
             raw, post = run(problem, seed, budgets.length)
             figures.add("raw", name, raw)
@@ -224,11 +256,12 @@ def table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join([line(header), line(["-" * w for w in widths]), *map(line, rows)])
 
 
-def report(all_figures: list[Figures], budgets: Budgets, with_ompl: bool) -> str:
-    """The figures as three markdown tables, with how many runs each median is over."""
-    names = [OURS, *([OMPL] if with_ompl else []), TEXTBOOK]
-    searched = names[:-1]  # the planners whose path length after a budget is measured
-    caps = {OURS: budgets.first, OMPL: budgets.first, TEXTBOOK: budgets.textbook}
+def report(all_figures: list[Figures], budgets: Budgets, names: list[str]) -> str:
+    """The figures of the planners ``names`` (ours first) as three markdown tables, with
+    how many runs each median is over."""
+    with_ompl = OMPL in names
+    searched = [OURS, *([OMPL] if with_ompl else [])]  # path length after a budget
+    caps = {n: budgets.textbook if n == TEXTBOOK else budgets.first for n in names}
     first_rows, call_rows, length_rows = [], [], []
     for f in all_figures:
         first = {n: median(f.runs("first", n)) for n in names}
@@ -238,7 +271,7 @@ def report(all_figures: list[Figures], budgets: Budgets, with_ompl: bool) -> str
             + [ratio(first[n], first[OURS], caps[n]) for n in names[1:]])
         call_rows.append(
             [f.label]
-            + [cell(median(f.runs("call", n)), 3) for n in names]
+            + [cell(median(f.runs("setup", n)), 3) for n in names]
             + [cell(median(f.runs("first length", n)), 4) for n in names])
         raw = {n: median(f.runs("raw", n)) for n in searched}
         post = {n: median(f.runs("post", n)) for n in searched}
@@ -256,9 +289,9 @@ def report(all_figures: list[Figures], budgets: Budgets, with_ompl: bool) -> str
         table(["map", "blocks", *(f"{n} (found)" for n in names),
                *(f"{n}/ours" for n in names[1:])], first_rows),
         "",
-        "## The same runs: wall time of the whole planner call, s, and first path length, m",
+        "## The same runs: set-up outside the clock, s, and first path length, m",
         "",
-        table(["map", *(f"call {n}" for n in names), *(f"length {n}" for n in names)],
+        table(["map", *(f"set-up {n}" for n in names), *(f"length {n}" for n in names)],
               call_rows),
         "",
         f"## Path length, m, after a {budgets.length:g} s search (median over "
@@ -314,16 +347,23 @@ def main() -> None:
         length=args.length_budget or (0.3 if args.quick else 1.0))
     with_ompl = ompl_available()
     if not with_ompl:
-        print("OMPL is not installed (pip install 'quadnav[ompl]'): its columns are left out")
+        print("OMPL's Python bindings are not installed (pip install 'quadnav[ompl]'): "
+              f"the {OMPL} columns are left out")
+    compiled, why_not = compiled_ompl()
+    if compiled is None:
+        print(f"compiled OMPL: {why_not}; the {OMPL_CPP} column is left out")
+    names = [OURS, *([OMPL_CPP] if compiled else []), *([OMPL] if with_ompl else []), TEXTBOOK]
 
     all_figures = []
     for case in CASES:
         if isinstance(case.source, Path) and not case.source.is_file():
             print(f"{case.label}: skipped, {case.source} not found")
             continue
-        all_figures.append(measure(case, seeds, baseline_seeds, budgets, with_ompl))
+        with tempfile.TemporaryDirectory() as scratch:
+            all_figures.append(measure(case, seeds, baseline_seeds, budgets, with_ompl,
+                                       compiled, Path(scratch)))
     print(f"margin {MARGIN:g} m; each map's start and goal are the same for every planner\n")
-    print(report(all_figures, budgets, with_ompl))
+    print(report(all_figures, budgets, names))
     if args.json:
         args.json.write_text(json.dumps(as_json(all_figures, budgets, seeds, baseline_seeds),
                                         indent=2) + "\n", encoding="utf-8")

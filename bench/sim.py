@@ -14,7 +14,7 @@ thread in this process (the ``quadnav fly`` runs keep their defaults). It prints
   control, with its collision, boundary and divergence checks at every physics step: the
   real-time factor (simulated seconds / wall seconds of the whole call), median over
   repeated runs after a warm-up run (numba compilation or cache loading) that is not
-  counted. Target: at least 200x.
+  counted. Target: at least 500x.
 * the baseline, measured in the same run on the same trajectory, vehicle and controller:
   the loop of rotorpy — the controller (here the compiled
   :func:`quadnav.control.cascade.control`) at 100 Hz, and after each control step the
@@ -77,7 +77,7 @@ V_MAX = 2.0
 #: Control rate of the rotorpy-style baseline, Hz.
 BASELINE_RATE = 100.0
 #: Target real-time factor of quadnav's loop.
-TARGET = 200.0
+TARGET = 500.0
 
 
 # ------------------------------------------------------------------- the flight

@@ -15,6 +15,7 @@ from quadnav.vehicle.dynamics import (
     STATE_SIZE,
     hover_state,
     rk4_step,
+    rk4_workspace,
     rotor_speed_commands,
     vehicle_arrays,
 )
@@ -129,8 +130,10 @@ def test_rotor_geometry_signs():
 def _fly(params, state, commands, seconds, dt=0.001, floor_z=-math.inf, force=(0, 0, 0)):
     v = vehicle_arrays(params)
     x = np.array(state, dtype=float)
+    work = rk4_workspace()
     for _ in range(round(seconds / dt)):
-        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float), dt, floor_z)
+        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float), dt, floor_z,
+                 work)
     return x
 
 
@@ -159,9 +162,9 @@ def test_motors_lag_their_command_with_the_stated_time_constant():
     tau = TELLO.motor_time_constant
     end = _fly(TELLO, state, [1.0] * 4, tau)
     assert end[13] == pytest.approx(TELLO.rotor_speed_max * (1 - math.exp(-1)), rel=1e-6)
-    assert np.allclose(rotor_speed_commands(np.array([0.25, 1.0, -1.0, 2.0]),
-                                            vehicle_arrays(TELLO)),
-                       TELLO.rotor_speed_max * np.array([0.5, 1.0, 0.0, 1.0]))
+    speeds = np.empty(4)
+    rotor_speed_commands(np.array([0.25, 1.0, -1.0, 2.0]), vehicle_arrays(TELLO), speeds)
+    assert np.allclose(speeds, TELLO.rotor_speed_max * np.array([0.5, 1.0, 0.0, 1.0]))
 
 
 def test_more_thrust_on_the_clockwise_rotors_yaws_counter_clockwise():

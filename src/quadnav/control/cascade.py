@@ -141,20 +141,25 @@ def _thrust_vector(force: np.ndarray, v: VehicleArrays, g: GainArrays) -> None:
 
 
 @njit(cache=True)
-def _attitude_setpoint(thrust_direction, yaw):
-    """Attitude (4,) with body z along ``thrust_direction`` (3,, unit) heading ``yaw``."""
-    heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-    y_body = np.cross(thrust_direction, heading)
-    norm = np.linalg.norm(y_body)
-    if norm < 1e-6:  # thrust horizontal along the heading: keep any level y
-        y_body = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-    else:
-        y_body /= norm
-    x_body = np.cross(y_body, thrust_direction)
+def _attitude_setpoint(thrust: np.ndarray, yaw: float) -> np.ndarray:
+    """Attitude (4,) with body z along the nonzero vector ``thrust`` (3,) heading ``yaw``.
+
+    The body axes are the columns of a rotation matrix: z the thrust direction, y
+    perpendicular to it and to the heading ``(cos yaw, sin yaw, 0)``, x = y cross z."""
     r = np.empty((3, 3))
-    r[:, 0] = x_body
-    r[:, 1] = y_body
-    r[:, 2] = thrust_direction
+    z = r[:, 2]
+    z[:] = thrust / math.sqrt(thrust[0] ** 2 + thrust[1] ** 2 + thrust[2] ** 2)
+    c, s = math.cos(yaw), math.sin(yaw)
+    y = r[:, 1]  # z cross heading
+    y[0], y[1], y[2] = -z[2] * s, z[2] * c, z[0] * s - z[1] * c
+    norm = math.sqrt(y[0] ** 2 + y[1] ** 2 + y[2] ** 2)
+    if norm < 1e-6:  # thrust horizontal along the heading: keep any level y
+        y[0], y[1], y[2] = -s, c, 0.0
+    else:
+        y /= norm
+    r[0, 0] = y[1] * z[2] - y[2] * z[1]
+    r[1, 0] = y[2] * z[0] - y[0] * z[2]
+    r[2, 0] = y[0] * z[1] - y[1] * z[0]
     return quaternion.from_matrix(r)
 
 
@@ -167,10 +172,12 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
     started = memory[_STARTED] > 0.0
     alpha = _smoothing(g, dt)
     r = quaternion.to_matrix(state[6:10])
+    # the 3-vectors of the steps below, as views of one array (one allocation, not seven)
+    work = np.empty(21)
+    position_error, v_sp, raw_v = work[0:3], work[3:6], work[6:9]
+    velocity_error, a_sp, force, unlimited = work[9:12], work[12:15], work[15:18], work[18:21]
 
     # 1. position -> velocity setpoint
-    position_error = np.empty(3)
-    v_sp = np.empty(3)
     for a in range(3):
         e = reference[a] - state[a]
         rate = _filtered_rate(memory, _POSITION_ERROR_RATE, _PREVIOUS_POSITION_ERROR, e, a,
@@ -178,7 +185,7 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
         position_error[a] = e
         v_sp[a] = (reference[3 + a] + g.position[0, a] * e + memory[_POSITION_INTEGRAL + a]
                    + g.position[2, a] * rate)
-    raw_v = v_sp.copy()
+    raw_v[:] = v_sp
     _scale_xy(v_sp, g.speed_limits[0])
     v_sp[2] = min(max(v_sp[2], -g.speed_limits[2]), g.speed_limits[1])
     for a in range(3):
@@ -188,8 +195,6 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
                 g.position[3, a])
 
     # 2. velocity -> acceleration setpoint
-    velocity_error = np.empty(3)
-    a_sp = np.empty(3)
     for a in range(3):
         e = v_sp[a] - state[3 + a]
         measured = _filtered_rate(memory, _ACCELERATION, _PREVIOUS_VELOCITY, state[3 + a], a,
@@ -201,12 +206,11 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
 
     # 3. thrust vector, with the drag at the reference velocity as feed-forward
     drag = reference_drag(r, v, reference)
-    force = np.empty(3)
     for a in range(3):
         force[a] = (v.mass * a_sp[a] + r[a, 0] * drag[0] + r[a, 1] * drag[1]
                     + r[a, 2] * drag[2])
     force[2] += v.mass * v.gravity
-    unlimited = force.copy()
+    unlimited[:] = force
     _thrust_vector(force, v, g)
     for a in range(3):  # back-calculation: integrate only the error the output can follow
         taken = (unlimited[a] - force[a]) / v.mass
@@ -214,10 +218,9 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
         memory[_VELOCITY_INTEGRAL + a] = _clip(
             memory[_VELOCITY_INTEGRAL + a] + g.velocity[1, a] * corrected * dt,
             g.velocity[3, a])
-    magnitude = math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2)
     collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
 
-    q_sp = _attitude_setpoint(force / magnitude, reference[9])
+    q_sp = _attitude_setpoint(force, reference[9])
     return _inner_loops(memory, state, r, q_sp, collective, reference[10], g, v, dt, alpha,
                         started)
 
@@ -242,8 +245,10 @@ def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
     q_error = quaternion.multiply(quaternion.conjugate(state[6:10]), q_sp)
     sign = 1.0 if q_error[0] >= 0.0 else -1.0
 
-    # 5. body rate -> torque
-    torque = np.empty(3)
+    # 5. body rate -> torque, written into the wrench the mixer takes
+    wrench = np.empty(4)
+    wrench[0] = collective
+    torque = wrench[1:4]
     saturated = memory[MIXER_SATURATED] > 0.0
     for b in range(3):
         w_sp = _clip(2.0 * g.attitude_kp[b] * sign * q_error[1 + b] + r[2, b] * yaw_rate,
@@ -259,8 +264,8 @@ def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
     add_gyroscopic(torque, state, v)
 
     # 6. mixer
-    wrench = np.array([collective, torque[0], torque[1], torque[2]])
     thrusts, changed = mix(wrench, v.mixer, v.max_rotor_thrust)
     memory[MIXER_SATURATED] = 1.0 if changed else 0.0
     memory[_STARTED] = 1.0
-    return thrusts / v.max_rotor_thrust
+    thrusts /= v.max_rotor_thrust
+    return thrusts

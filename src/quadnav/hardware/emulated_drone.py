@@ -40,7 +40,7 @@ from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
 from quadnav.sim.settings import SimSettings
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import hover_state, rk4_step, vehicle_arrays
+from quadnav.vehicle.dynamics import hover_state, rk4_step, rk4_workspace, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams, load_params
 
 #: Height of the hover after ``takeoff`` above the floor, m (the SDK's "about 80 cm").
@@ -483,12 +483,12 @@ class EmulatedDrone:
     def _fall(self, steps: int) -> FloatArray:
         """Motors off, under gravity to the floor; positions (K, 3) before each step."""
         positions = np.empty((steps, 3))
-        off = np.zeros(4)
+        off, still, work = np.zeros(4), np.zeros(3), rk4_workspace()
         for k in range(steps):
             positions[k] = self._state[0:3]
             for _ in range(self.settings.substeps):
-                rk4_step(self._state, off, self._vehicle, np.zeros(3),
-                         self._dt / self.settings.substeps, self.floor)
+                rk4_step(self._state, off, self._vehicle, still,
+                         self._dt / self.settings.substeps, self.floor, work)
         if self._state[2] <= self.floor + 1e-6 and abs(self._state[5]) < 1e-6:
             self.falling = False
             self._state = self._resting(self._state[0:3], self.yaw)

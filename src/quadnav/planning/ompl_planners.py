@@ -317,10 +317,12 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
     world = problem.free_world
     with _quiet():
         ou.RNG.setSeed(_ompl_seed(settings.seed))
+        setup_began = time.perf_counter()
         si = _space_information(world)
         pdef = _problem_definition(si, problem.search_start, problem.search_goal,
                                    settings.stop_at_first)
         planner = _planner(name, si, pdef, settings, settings.step_for(world))
+        setup_seconds = time.perf_counter() - setup_began
         solve = _solve_sliced if name in _THREADED else _solve_polled
         history, seconds = solve(planner, pdef, settings, progress)
         search_path = _solution(world, pdef, problem.search_goal)
@@ -335,7 +337,8 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
     stats = PlanStats(iterations=int(iterations), nodes=len(nodes), seconds=seconds,
                       time_to_first=history[0][0] if history else None,
                       cost_history=np.array(history).reshape(-1, 2),
-                      stopped_by="iterations" if capped else "time")
+                      stopped_by="iterations" if capped else "time",
+                      setup_seconds=setup_seconds)
     return PlanResult(
         planner=OMPL_PREFIX + name,
         solved=search_path is not None,

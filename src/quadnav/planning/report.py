@@ -66,6 +66,7 @@ def plan_summary(problem: PlanningProblem, result: PlanResult, settings: Planner
             "nodes": stats.nodes,
             "seconds": stats.seconds,
             "time_to_first": stats.time_to_first,
+            "setup_seconds": stats.setup_seconds,
             "cost_history": stats.cost_history.tolist(),
             "post": [{"name": s.name, "length": s.length, "vertices": s.vertices,
                       "seconds": s.seconds} for s in stats.post],

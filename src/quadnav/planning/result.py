@@ -57,8 +57,9 @@ class PlanStats:
     Attributes:
         iterations: samples drawn (for OMPL planners: as reported, else 0).
         nodes: vertices in the tree or roadmap.
-        seconds: wall time of the search, s.
-        time_to_first: wall time until the first solution, s; ``None`` if none was found.
+        seconds: wall time of the search, s, after its set-up.
+        time_to_first: wall time from the end of the set-up until the first solution, s;
+            ``None`` if none was found.
         cost_history: (K, 2) rows ``(time s, path length m)``, one per improvement of
             the best solution, in time order; (0, 2) when there was no solution.
         post: post-processing steps applied after the search, in order.
@@ -66,6 +67,8 @@ class PlanStats:
             ``"improvement"`` (the samples allowed after the first solution),
             ``"time"`` (the time budget), ``"direct"`` (the goal was in sight of the
             start), or ``None`` when the planner does not say.
+        setup_seconds: wall time of the set-up before the search's clock started, s
+            (spatial indexes, the planner's arrays or objects; 0 when not measured).
     """
 
     iterations: int
@@ -75,6 +78,7 @@ class PlanStats:
     cost_history: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     post: tuple[PostStep, ...] = ()
     stopped_by: str | None = None
+    setup_seconds: float = 0.0
 
     def __post_init__(self) -> None:
         history = np.array(self.cost_history, dtype=np.float64).reshape(-1, 2)

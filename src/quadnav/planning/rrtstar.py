@@ -34,7 +34,6 @@ from quadnav.planning.rrtstar_kernel import (
     start_tree,
 )
 from quadnav.planning.settings import PlannerSettings
-from quadnav.world.blockgrid import build_block_grid
 from quadnav.world.model import World
 
 #: Name of this planner in results and on the command line.
@@ -108,7 +107,7 @@ def _load_kernels() -> None:
     _search(problem, PlannerSettings(max_iterations=200, seed=0, time_limit=3600.0), None)
     tree = empty_tree(1)
     tree.counts[NODES] = 1
-    grown_tree(tree, 2, world.lower, world.extent)
+    grown_tree(tree, 2, world.lower.copy(), world.extent.copy())  # writable, as _search's
 
 
 def plan_rrtstar(problem: PlanningProblem, settings: PlannerSettings,
@@ -123,8 +122,9 @@ def plan_rrtstar(problem: PlanningProblem, settings: PlannerSettings,
 
 def _search(problem: PlanningProblem, settings: PlannerSettings,
             progress: Progress | None) -> PlanResult:
-    """RRT* proper; see :func:`plan_rrtstar`."""
-    clock = time.perf_counter()
+    """RRT* proper; see :func:`plan_rrtstar`. The set-up (block grid, sampling frame,
+    random generator, empty tree) is timed apart from the search, as OMPL's is."""
+    setup_began = time.perf_counter()
     world = problem.free_world
     # Writable copies, so numba sees the same array types whatever the caller passed.
     start, goal = np.array(problem.search_start), np.array(problem.search_goal)
@@ -133,7 +133,7 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     tuning = np.array([step, settings.goal_bias, goal_tolerance,
                        settings.rewire_factor,
                        1.0 if settings.informed else 0.0])
-    grid = build_block_grid(world)
+    grid = world.block_grid
     rotation = _frame(start, goal)
     origin, extent = world.lower.copy(), world.extent.copy()
     rng = np.random.default_rng(settings.seed)
@@ -147,6 +147,8 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     history: list[tuple[float, float]] = []
     time_to_first = None
     chunk = _FIRST_CHUNK
+    clock = time.perf_counter()
+    setup_seconds = clock - setup_began
     while True:
         now = time.perf_counter() - clock
         if best[BEST_VERTEX] >= 0 and (not history or best[BEST_COST] < history[-1][1]):
@@ -177,7 +179,8 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     count = int(counts[NODES])
     stats = PlanStats(iterations=int(counts[ITERATIONS]), nodes=count,
                       seconds=time.perf_counter() - clock, time_to_first=time_to_first,
-                      cost_history=np.array(history).reshape(-1, 2), stopped_by=stopped_by)
+                      cost_history=np.array(history).reshape(-1, 2), stopped_by=stopped_by,
+                      setup_seconds=setup_seconds)
     explored = (tree.nodes[:count].copy(), tree.parent[:count].copy())
     if best[BEST_VERTEX] < 0:
         return PlanResult(NAME, False, np.zeros((0, 3)), *explored, stats, settings.seed,

@@ -203,14 +203,18 @@ def start_tree(query: Query, tree: Tree) -> None:
     nodes, cost, parent, first_child, next_sibling, goal_vertices = tree[:6]
     node_grid, counts, best = tree.node_grid, tree.counts, tree.best
     heads, next_in_cell, shape, inverse_cell = node_grid
-    nodes[0] = start
-    cost[0] = 0.0
-    parent[0] = -1
-    first_child[0] = -1
-    next_sibling[0] = -1
-    counts[NODES] = 1
-    insert(0, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
-    _try_goal(0, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
+    # The root's index is read from the (empty) tree's counts, so it has the type of the
+    # indices grow passes: a literal 0 would compile insert and _try_goal once more.
+    root = counts[NODES]
+    for a in range(3):  # not nodes[root] = start, whose shape check compiles messages
+        nodes[root, a] = start[a]
+    cost[root] = 0.0
+    parent[root] = -1
+    first_child[root] = -1
+    next_sibling[root] = -1
+    counts[NODES] = root + 1
+    insert(root, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
+    _try_goal(root, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
     _update_best(goal, nodes, cost, goal_vertices, counts, best)
 
 

@@ -25,7 +25,7 @@ from quadnav.control.contract import SATURATED as STEP_SATURATED
 from quadnav.control.contract import Controller
 from quadnav.sim.collision import body_grid, touched_block
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import STATE_SIZE, VehicleArrays, rk4_step
+from quadnav.vehicle.dynamics import STATE_SIZE, VehicleArrays, rk4_step, rk4_workspace
 from quadnav.world.blockgrid import GridArrays
 from quadnav.world.model import World
 
@@ -144,6 +144,7 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         record: where the states, commands and statistics go (:func:`new_record`).
     """
     dt = dt_control / substeps
+    work = rk4_workspace()
     last_reference = references.shape[0] - 1
     for k in range(first, last):
         reference = references[min(k, last_reference)]
@@ -164,7 +165,7 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
             record.states[k // record.every] = state
             record.commands[k // record.every] = commands
         for _ in range(substeps):
-            rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z)
+            rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z, work)
             code = _stop_code(state, v, where, stats)
             if code != RUNNING:
                 return code, k + 1 - first

@@ -118,26 +118,41 @@ def derivative(x: np.ndarray, rotor_command: np.ndarray, v: VehicleArrays,
 
 
 @njit(cache=True)
-def rotor_speed_commands(commands: np.ndarray, v: VehicleArrays) -> np.ndarray:
-    """Rotor speeds (4,) rad/s asked for by motor commands (4,) in [0, 1] (clipped)."""
-    return v.rotor_speed_max * np.sqrt(np.minimum(np.maximum(commands, 0.0), 1.0))
+def rotor_speed_commands(commands: np.ndarray, v: VehicleArrays, out: np.ndarray) -> None:
+    """Write into ``out`` (4,) the rotor speeds, rad/s, asked for by motor commands (4,)
+    in [0, 1] (clipped)."""
+    for i in range(4):
+        out[i] = v.rotor_speed_max * math.sqrt(min(max(commands[i], 0.0), 1.0))
+
+
+#: Rows of an RK4 workspace (:func:`rk4_workspace`): the four stages' derivatives, the
+#: stage state, and the rotor speed targets in the first four entries of the last row.
+_STAGES, _STAGE_STATE, _TARGETS = 0, 4, 5
+
+
+@njit(cache=True)
+def rk4_workspace() -> FloatArray:
+    """Scratch space (6, 17) for :func:`rk4_step`, so a step allocates nothing."""
+    return np.empty((6, STATE_SIZE))
 
 
 @njit(cache=True)
 def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.ndarray,
-             dt: float, floor_z: float) -> None:
+             dt: float, floor_z: float, work: np.ndarray) -> None:
     """Advance the state ``x`` (17,) in place by ``dt`` s holding motor commands (4,) and
-    force (3,) N: one RK4 step, then the quaternion renormalised and the floor applied."""
-    target = rotor_speed_commands(commands, v)
-    k = np.empty((4, STATE_SIZE))
-    stage = np.empty(STATE_SIZE)
-    derivative(x, target, v, force, k[0])
+    force (3,) N: one RK4 step, then the quaternion renormalised and the floor applied.
+    ``work`` is :func:`rk4_workspace` (overwritten)."""
+    target = work[_TARGETS, 0:4]
+    rotor_speed_commands(commands, v, target)
+    stage = work[_STAGE_STATE]
+    derivative(x, target, v, force, work[_STAGES])
     for step, weight in ((1, 0.5), (2, 0.5), (3, 1.0)):
+        previous = work[_STAGES + step - 1]
         for i in range(STATE_SIZE):
-            stage[i] = x[i] + weight * dt * k[step - 1, i]
-        derivative(stage, target, v, force, k[step])
+            stage[i] = x[i] + weight * dt * previous[i]
+        derivative(stage, target, v, force, work[_STAGES + step])
     for i in range(STATE_SIZE):
-        x[i] += dt / 6.0 * (k[0, i] + 2.0 * k[1, i] + 2.0 * k[2, i] + k[3, i])
+        x[i] += dt / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
     norm = math.sqrt(x[6] ** 2 + x[7] ** 2 + x[8] ** 2 + x[9] ** 2)
     for i in range(6, 10):
         x[i] /= norm

@@ -53,10 +53,15 @@ def mix(wrench: np.ndarray, mixer: np.ndarray, max_thrust: float) -> tuple[np.nd
     torques are scaled down if even the full thrust range cannot hold them, then the
     collective thrust is shifted to fit, and the yaw torque is scaled to what is left.
     """
-    exact = mixer @ wrench
+    exact = np.empty(4)
+    for i in range(4):  # mixer @ wrench, without a BLAS call for a 4 x 4 product
+        exact[i] = (mixer[i, 0] * wrench[0] + mixer[i, 1] * wrench[1]
+                    + mixer[i, 2] * wrench[2] + mixer[i, 3] * wrench[3])
     slack = _ROUNDING * max_thrust
     if exact.min() >= -slack and exact.max() <= max_thrust + slack:
-        return np.minimum(np.maximum(exact, 0.0), max_thrust), False
+        for i in range(4):
+            exact[i] = min(max(exact[i], 0.0), max_thrust)
+        return exact, False
     collective = mixer[:, 0] * wrench[0]
     roll_pitch = mixer[:, 1] * wrench[1] + mixer[:, 2] * wrench[2]
     yaw = mixer[:, 3] * wrench[3]

@@ -62,7 +62,7 @@ def connected(
             the grid within :data:`MAX_VOXELS` voxels (:func:`default_resolution`).
     """
     points = np.array([start, goal], dtype=np.float64)
-    if not np.all(world.points_free(points)):
+    if not (world.is_free(points[0]) and world.is_free(points[1])):  # no threads for two
         return False
     if resolution is None:
         resolution = default_resolution(world.extent)

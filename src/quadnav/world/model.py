@@ -294,15 +294,21 @@ class World:
         raise ValueError(f"{self.name}: found only {count} free points in {1000 * batch} draws")
 
 
+def _compiled_input(values: ArrayLike) -> FloatArray:
+    """``values`` as a C-contiguous, writable float64 array (copied only when it is not):
+    compiled code is specialised on read-only arrays apart, so one kind is passed."""
+    return np.require(values, dtype=np.float64, requirements=["C", "W"])
+
+
 def _points(points: ArrayLike) -> FloatArray:
-    pts = np.ascontiguousarray(points, dtype=np.float64)
+    pts = _compiled_input(points)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must have shape (N, 3), got {pts.shape}")
     return pts
 
 
 def _segments(segments: ArrayLike) -> FloatArray:
-    segs = np.ascontiguousarray(segments, dtype=np.float64)
+    segs = _compiled_input(segments)
     if segs.ndim != 3 or segs.shape[1:] != (2, 3):
         raise ValueError(f"segments must have shape (N, 2, 3), got {segs.shape}")
     return segs
