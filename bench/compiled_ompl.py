@@ -9,6 +9,7 @@ missing, so the bench can leave its column out with that reason.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 import subprocess
 from dataclasses import dataclass
@@ -44,12 +45,16 @@ def compiled_ompl() -> tuple[Path | None, str]:
     if BINARY.is_file() and BINARY.stat().st_mtime >= SOURCE.stat().st_mtime:
         return BINARY, ""
     BINARY.parent.mkdir(exist_ok=True)
+    # Built under a name of this process's own, then renamed: two processes building at
+    # once never run a half-written binary.
+    partial = BINARY.with_name(f"{BINARY.name}.{os.getpid()}")
     command = [compiler, "-O2", "-DNDEBUG", "-std=c++17",
-               *(f"-I{p}" for p in INCLUDES), str(SOURCE), "-o", str(BINARY), "-lompl"]
+               *(f"-I{p}" for p in INCLUDES), str(SOURCE), "-o", str(partial), "-lompl"]
     built = subprocess.run(command, capture_output=True, text=True, check=False)
     if built.returncode != 0:
         errors = [line for line in built.stderr.splitlines() if "error" in line]
         return None, f"g++ failed: {(errors or ['no message'])[0]}"
+    partial.replace(BINARY)
     return BINARY, ""
 
 

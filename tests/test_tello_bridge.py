@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 from tellotools import (
     MAP,
     MARGIN,
+    ROOM,
     START_GOAL,
     assert_kept_the_fence,
     assert_on_the_floor,
@@ -53,6 +54,7 @@ from quadnav.hardware.rc import (
     stick_velocity,
     tracking_velocity,
 )
+from quadnav.runs import read_run
 from quadnav.world import World
 
 ALWAYS = lambda start, end, segments: True  # noqa: E731  (a geofence that allows all)
@@ -293,6 +295,35 @@ def test_cli_dry_run_prints_every_command_and_sends_nothing(shared_maps, tmp_pat
     assert records[0]["kind"] == "start" and records[0]["dry_run"]
     assert [r["text"] for r in records if r["kind"] == "command"] == commands
     assert (tmp_path / "tello_track.png").stat().st_size > 0
+
+
+def test_a_saved_path_is_flown_as_given_through_the_same_checks(tmp_path):
+    room = tmp_path / "room.txt"
+    room.write_text(ROOM)
+    saved = tmp_path / "mine.csv"  # a student's own path: a dog-leg through the room
+    saved.write_text("x,y,z\n0.5,1,0.8\n2,1.3,1.0\n3.5,1,0.8\n")
+    result = run("tello", "fly", room, "--path", saved, "--dry-run", "--quiet",
+                 "-o", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    flown = read_run(tmp_path / "out")
+    assert flown.metrics["planner"] == "saved path" and flown.tree_nodes.shape == (0, 3)
+    assert np.allclose(flown.path[2:-1], [[0.5, 1, 0.8], [2, 1.3, 1.0], [3.5, 1, 0.8]])
+    moves = [line for line in result.stdout.splitlines() if line.startswith("go ")]
+    assert len(moves) >= 2  # the corner at (2, 1.3, 1) is flown, not cut
+
+    near_wall = tmp_path / "near.csv"  # 0.25 m from the ceiling: inside margin + allowance
+    near_wall.write_text("x,y,z\n0.5,1,0.8\n2,1,1.25\n3.5,1,0.8\n")
+    assert_user_error(run("tello", "fly", room, "--path", near_wall, "--dry-run",
+                          "-o", tmp_path / "refused"),
+                      f"{near_wall}: the segment (0.5, 1, 0.8) -> (2, 1, 1.25) comes closer "
+                      "than 0.3 m", "the path keeps 0.25 m; fly it with --margin 0.15 or less")
+    assert not (tmp_path / "refused").exists()
+    assert_user_error(run("tello", "fly", room, "--path", saved, "--goal", "3", "1", "1",
+                          "--dry-run", "-o", tmp_path / "refused"),
+                      "leave out --start, --goal and --start-goal")
+    saved.write_text("x,y\n1,2\n")
+    assert_user_error(run("tello", "fly", room, "--path", saved, "--dry-run",
+                          "-o", tmp_path / "refused"), f"{saved}:1:", "x,y,z")
 
 
 def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, tmp_path):

@@ -61,6 +61,24 @@ TREE_HEADER = "x,y,z,parent"
 
 
 @dataclass(frozen=True, eq=False)
+class FlightTable:
+    """flight.csv as arrays: t (N,) s, position, velocity (N, 3), attitude (N, 4)
+    quaternions (w, x, y, z), commands (N, 4) in [0, 1], reference (N, 3) m."""
+
+    t: FloatArray
+    position: FloatArray
+    velocity: FloatArray
+    attitude: FloatArray
+    commands: FloatArray
+    reference: FloatArray
+
+    def csv(self) -> str:
+        """The table as flight.csv (:data:`~quadnav.sim.export.FLIGHT_HEADER`)."""
+        return csv_table(np.column_stack([self.t, self.position, self.velocity, self.attitude,
+                                          self.commands, self.reference]), FLIGHT_HEADER)
+
+
+@dataclass(frozen=True, eq=False)
 class RunContent:
     """What a run folder holds, whatever made it (:func:`run_content`).
 
@@ -71,7 +89,7 @@ class RunContent:
         tree: the explored tree's vertices (N, 3) m and parent rows (N,), or None.
         path: (M, 3) the refined path, m, or None.
         reference: what was flown, or None without a flight.
-        flight: the flight, or None.
+        flight: the flight (simulated, or a real one's :class:`FlightTable`), or None.
     """
 
     world: World
@@ -80,7 +98,7 @@ class RunContent:
     tree: tuple[FloatArray, IntArray] | None
     path: FloatArray | None
     reference: Reference | None
-    flight: Flight | None
+    flight: Flight | FlightTable | None
 
 
 def run_content(run: Mission | Tracking) -> RunContent:
@@ -111,7 +129,9 @@ def write_run_files(content: RunContent, folder: Path) -> list[str]:
         texts["path.csv"] = path_csv(content.path)
     if content.reference is not None and content.flight is not None:
         texts["trajectory.csv"] = trajectory_csv(content.reference, TRAJECTORY_DT)
-        texts["flight.csv"] = flight_csv(content.flight)
+        flight = content.flight
+        texts["flight.csv"] = (flight_csv(flight) if isinstance(flight, Flight)
+                               else flight.csv())
     for name, text in texts.items():
         (folder / name).write_text(text, encoding="utf-8")
     return list(texts)
@@ -130,19 +150,6 @@ def _finite(value):
     if isinstance(value, float) and not np.isfinite(value):
         return None
     return value
-
-
-@dataclass(frozen=True, eq=False)
-class FlightTable:
-    """flight.csv as arrays: t (N,) s, position, velocity (N, 3), attitude (N, 4)
-    quaternions (w, x, y, z), commands (N, 4) in [0, 1], reference (N, 3) m."""
-
-    t: FloatArray
-    position: FloatArray
-    velocity: FloatArray
-    attitude: FloatArray
-    commands: FloatArray
-    reference: FloatArray
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,6 +186,12 @@ class Run:
     def is_track(self) -> bool:
         """Whether ``quadnav track`` wrote the folder (a reference flown, no planning)."""
         return "reference" in self.metrics
+
+    @property
+    def is_hardware(self) -> bool:
+        """Whether a real (or emulated) drone flew it (``quadnav tello fly``): its flight
+        is a tracked position, with no motor commands and no timed reference."""
+        return self.metrics.get("source") == "tello"
 
     @property
     def title(self) -> str:

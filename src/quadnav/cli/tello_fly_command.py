@@ -29,6 +29,7 @@ from quadnav.cli.args import (
     time_scale,
 )
 from quadnav.cli.progress import planning_bar
+from quadnav.errors import QuadnavError
 from quadnav.hardware.bridge import (
     MIN_BATTERY,
     MODES,
@@ -41,12 +42,16 @@ from quadnav.hardware.bridge import (
 from quadnav.hardware.flight_plan import TRACKING_ALLOWANCE, NoPathError, plan_flight
 from quadnav.hardware.link import TELLO_IP
 from quadnav.hardware.rc import RC_FULL_SPEED
+from quadnav.hardware.run_record import tello_run_content
 from quadnav.hardware.tello_log import LOG_NAME
 from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
 from quadnav.planning import get_planner
+from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder, replaced_folder
+from quadnav.runs import RUN_FILES
 from quadnav.trajectory.generate import TrajectorySettings
+from quadnav.trajectory.pathfile import read_path_csv
 from quadnav.world import load_world
 
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
@@ -101,24 +106,37 @@ def tello_fly(args: argparse.Namespace) -> int:
                               time_scale=args.time_scale)
     folder = check_output_folder(args.output)
     world = load_world(args.map)
-    start, goal = resolve_start_goal(args, world)
+    if args.path is not None:
+        if any(v is not None for v in (args.start, args.goal, args.start_goal)):
+            raise QuadnavError(f"--path {args.path}: the path's ends are the start and goal; "
+                               "leave out --start, --goal and --start-goal")
+        start = goal = None
+        saved = (read_path_csv(args.path), args.path)
+    else:
+        start, goal = resolve_start_goal(args, world)
+        saved = None
     try:
-        with planning_bar(f"plan ({args.planner})", args.quiet) as progress:
+        with planning_bar(f"plan ({args.planner})", args.quiet or saved is not None) as progress:
             plan = plan_flight(
                 world, start, goal, resolve_margin(args, world), math.radians(args.yaw),
                 args.planner,
                 planner_budget(args),
-                TrajectorySettings(v_max=args.speed, a_max=args.accel), progress)
+                TrajectorySettings(v_max=args.speed, a_max=args.accel), progress, saved)
     except NoPathError as error:
         print(f"quadnav: tello: {error}", file=sys.stderr)
         return EXIT_FAILED
     # The log is written as the flight goes: whatever ends the flight (a safe stop, an
     # error, Ctrl-C, SIGTERM), the folder gets the new log and, if it was drawn, the figure.
-    with replaced_folder(folder, TELLO_FILES, keep_partial=True) as staging:
-        outcome, _ = fly(plan, settings, staging, host=None if args.dry_run else args.host)
+    # The earlier run's folder files go with the new log: the run folder written next
+    # (what report, view, animate and blender read) is never another flight's.
+    host = None if args.dry_run else args.host
+    with replaced_folder(folder, (*TELLO_FILES, *RUN_FILES), keep_partial=True) as staging:
+        outcome, track = fly(plan, settings, staging, host=host)
+    written = write_run(tello_run_content(plan, settings, outcome, track, host), folder,
+                        figures=not args.no_figures)
     stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
     print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
-    print(f"wrote {folder / LOG_NAME}, {folder / TRACK_FIGURE}")
+    print(f"wrote {', '.join(str(folder / name) for name in (LOG_NAME, TRACK_FIGURE, *written))}")
     return exit_code(outcome)
 
 
@@ -140,7 +158,10 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "refused command, Ctrl-C, SIGTERM or SIGHUP stop the drone and land it; "
                     "below 10 % battery in flight the Tello lands by itself and the bridge "
                     f"waits for it. Writes DIR/{LOG_NAME} (every command, reply and state "
-                    f"packet) and DIR/{TRACK_FIGURE} (planned against flown). Exit 0 when "
+                    f"packet), DIR/{TRACK_FIGURE} (planned against flown) and a run folder "
+                    "as 'quadnav fly' does (map, tree, planned path and trajectory, the "
+                    "flown track as flight.csv, metrics, figures, report), which 'quadnav "
+                    "report', 'view', 'animate' and 'blender' read. Exit 0 when "
                     "landed at the goal; 1 on a safe stop, a landing by itself, a refused "
                     "takeoff or no path; 2 on bad input; 3 when the link was lost and no "
                     "landing was confirmed; 128 + the signal (130 Ctrl-C, 143 SIGTERM, 129 "
@@ -148,6 +169,13 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
     add_map_argument(p)
     add_start_goal_arguments(p)
     add_margin_argument(p)
+    p.add_argument("--path", metavar="CSV",
+                   help="fly this saved path (header x,y,z, one waypoint per row in metres, "
+                        "e.g. your own planner's output or 'quadnav plan' path.csv) instead "
+                        "of planning one: its first and last rows are the start and goal, and "
+                        "it goes through the same checks (every segment keeps the margin plus "
+                        f"{TRACKING_ALLOWANCE:g} m, except the legs out of and into the margin "
+                        "at a start or goal inside it)")
     p.add_argument("--mode", choices=MODES, default="waypoints",
                    help="'go' moves through the path's corners, or 'rc' sticks at 20 Hz "
                         "following the trajectory (default: waypoints)")
@@ -171,6 +199,8 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                    help=f"drone seconds per wall-clock second, {TIME_SCALE.describe()}: 1 "
                         "for a real drone, the emulator's --time-scale for an emulated one "
                         "(default: 1)")
+    p.add_argument("--no-figures", action="store_true",
+                   help="write the run folder's data files but not its figures and report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("-o", "--output", default="tello_flight", metavar="DIR",
                    help="folder to write into, created if needed (default: tello_flight)")

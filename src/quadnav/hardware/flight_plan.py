@@ -55,7 +55,7 @@ from quadnav.planning import (
     plan,
 )
 from quadnav.planning.refine import refine
-from quadnav.planning.result import distinct
+from quadnav.planning.result import PlanStats, distinct
 from quadnav.trajectory.generate import (
     TrajectorySettings,
     join_legs,
@@ -64,8 +64,12 @@ from quadnav.trajectory.generate import (
 )
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.space import SafeSpace
+from quadnav.world.margins import polyline_margin
 from quadnav.world.model import World
+from quadnav.world.placement import format_point
 
+#: The planner name of a saved path flown as given (:func:`saved_plan`).
+SAVED_PLANNER = "saved path"
 #: Height the Tello's ``takeoff`` leaves it at, about, metres above the floor.
 TAKEOFF_HEIGHT = 0.8
 #: Extra margin the path keeps beyond the geofence's, metres.
@@ -376,16 +380,18 @@ def _raised(leg: FloatArray, floor: float) -> FloatArray:
     return distinct(raised)
 
 
-def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence) -> tuple[Route, Route]:
+def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence,
+           pruned: bool = True) -> tuple[Route, Route]:
     """The route of the planner's ``path`` (N, 3), and the route pruned (see the
-    module's description): the legs' parts in the floor's margin raised to where they
-    leave it, below which the takeoff and landing columns take over."""
+    module's description; with ``pruned`` False, every corner kept, as for a saved path):
+    the legs' parts in the floor's margin raised to where they leave it, below which the
+    takeoff and landing columns take over."""
     floor = fence.free_world.lower[2]
     start_zone = _raised(problem.start_leg, floor)
     goal_zone = _raised(problem.goal_leg[::-1], floor)[::-1]
     middle = distinct(problem.search_part(path))
-    return (_joined(start_zone, middle, goal_zone),
-            _joined(start_zone, prune(middle, problem.free_world), goal_zone))
+    kept = prune(middle, problem.free_world) if pruned else middle
+    return _joined(start_zone, middle, goal_zone), _joined(start_zone, kept, goal_zone)
 
 
 def _trajectory(takeoff: FloatArray, route: Route, settings: TrajectorySettings,
@@ -411,17 +417,43 @@ def _trajectory(takeoff: FloatArray, route: Route, settings: TrajectorySettings,
     return join_legs(first or [], main, last or [], settings)
 
 
+def saved_plan(problem: PlanningProblem, path: ArrayLike, source: str) -> PlanResult:
+    """A saved path (N >= 2, 3) m from ``problem``'s start to its goal, as a plan: its
+    inner vertices, between the search's start and goal (a start or goal inside the
+    margin is left or entered by the problem's leg, as a planned path's is). Every
+    segment between the legs must keep the problem's margin, checked exactly; else
+    QuadnavError naming ``source`` and the first segment that does not."""
+    points = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+    search = distinct(np.vstack([problem.search_start, points[1:-1], problem.search_goal]))
+    free = problem.free_world.segments_free(np.stack([search[:-1], search[1:]], axis=1))
+    if not free.all():
+        k = int(np.argmin(free))
+        kept = polyline_margin(problem.world, search)
+        advice = (f"fly it with --margin {kept - TRACKING_ALLOWANCE:.3g} or less, or plan it"
+                  if kept > TRACKING_ALLOWANCE else "plan it again")
+        raise QuadnavError(
+            f"{source}: the segment {format_point(search[k])} -> "
+            f"{format_point(search[k + 1])} comes closer than {problem.margin:g} m (the "
+            f"margin plus {TRACKING_ALLOWANCE:g} m for tracking) to a block or the boundary: "
+            f"the path keeps {max(kept, 0.0):.3g} m; {advice} with a margin of "
+            f"{problem.margin:g} m")
+    stats = PlanStats(iterations=0, nodes=0, seconds=0.0, time_to_first=None)
+    return PlanResult(SAVED_PLANNER, True, problem.full_path(search), np.zeros((0, 3)),
+                      np.zeros(0, dtype=np.int64), stats, 0)
+
+
 def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
                 margin: float, yaw: float, planner: str = "rrtstar",
                 planning: PlannerSettings | None = None,
                 trajectory: TrajectorySettings | None = None,
-                progress: Progress | None = None) -> FlightPlan:
+                progress: Progress | None = None,
+                saved: tuple[FloatArray, str] | None = None) -> FlightPlan:
     """Plan, shape and check a flight (see the module's description).
 
     Args:
         world: the map, blocks not inflated.
-        start: (3,) m, or None for the map's own.
-        goal: (3,) m, or None for the map's own.
+        start: (3,) m, or None for the map's own (or, with ``saved``, its first point).
+        goal: (3,) m, or None for the map's own (or, with ``saved``, its last point).
         margin: the geofence's margin, m; the path keeps :data:`TRACKING_ALLOWANCE` more.
         yaw: map heading the drone faces on the floor, rad.
         planner: planner name, as for ``quadnav fly``.
@@ -429,21 +461,30 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         trajectory: generator and limits; ``v_max`` is the cruise speed; the timing is
             always :data:`TELLO_TIMING`.
         progress: called with (fraction of the planning budget, best length m).
+        saved: a saved path (N, 3) m and the file it came from, flown instead of a
+            planned one (see :func:`saved_plan`), through the same checks, every corner
+            kept (``go`` moves are not pruned to fewer).
 
     Raises:
-        QuadnavError: a bad query; NoPathError: no path; GeofenceError: a part of the
-            flight that leaves the fence (or, in a zone, the leg's room).
+        QuadnavError: a bad query or saved path; NoPathError: no path; GeofenceError: a
+            part of the flight that leaves the fence (or, in a zone, the leg's room).
     """
     trajectory = (trajectory or TrajectorySettings()).replace(timing=TELLO_TIMING)
+    if saved is not None:
+        start = saved[0][0] if start is None else start
+        goal = saved[0][-1] if goal is None else goal
     with warnings.catch_warnings():  # the legs are flown as legs: no need to warn
         warnings.simplefilter("ignore", PlanningWarning)
         problem = make_problem(world, start, goal, margin + TRACKING_ALLOWANCE)
-    result = plan(problem, planning, planner, progress)
-    if not result.solved:
-        raise NoPathError(f"{world.name}: no path found: {result.message}")
-    result = refine(problem, result)
+    if saved is not None:
+        result = saved_plan(problem, *saved)
+    else:
+        result = plan(problem, planning, planner, progress)
+        if not result.solved:
+            raise NoPathError(f"{world.name}: no path found: {result.message}")
+        result = refine(problem, result)
     fence = Geofence(world, margin)
-    route, pruned = _route(problem, result.path, fence)
+    route, pruned = _route(problem, result.path, fence, pruned=saved is None)
     frame = TakeoffFrame.under(problem.start, yaw)
     # Checked before the trajectory is made: the first refusal is the clearest.
     check_route(fence, leg_rooms(fence, problem), frame, route, pruned)

@@ -241,7 +241,8 @@ def tracking_error(flight: FlightTable) -> np.ndarray:
 def tracking_error_figure(run: Run) -> Figure:
     """The distance from the reference position against time, cm, with the RMS as a
     dashed line and the largest recorded error marked, the legend beside; the RMS and
-    maximum over every control step (metrics.json) are in the title."""
+    maximum over every control step (metrics.json) are in the title. For a real drone's
+    run the reference is the nearest point of the planned route, at every state packet."""
     flight, metrics = _flight(run), run.metrics
     error = CM_PER_M * tracking_error(flight)
     rms = CM_PER_M * metrics["rms_tracking_error_m"]
@@ -262,8 +263,10 @@ def tracking_error_figure(run: Run) -> Figure:
     ax.set_ylim(bottom=0.0, top=HEADROOM * max(float(error.max()), rms, 1e-6))
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=SMALL_FONT)
-    ax.set_title(f"position tracking error ({metrics['ending']} after {duration:.2f} s)\n"
-                 f"over every control step: RMS {rms:.2f} cm, "
+    what, over = (("distance from the planned route", "state packet") if run.is_hardware
+                  else ("position tracking error", "control step"))
+    ax.set_title(f"{what} ({metrics['ending']} after {duration:.2f} s)\n"
+                 f"over every {over}: RMS {rms:.2f} cm, "
                  f"max {CM_PER_M * metrics['max_tracking_error_m']:.2f} cm",
                  fontsize=TITLE_FONT)
     return finish(fig)
@@ -305,7 +308,12 @@ def attitude_motors_figure(run: Run) -> Figure:
 def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
     """The figures ``run`` has, by their file name in the run folder, in the order of
     :data:`~quadnav.runs.FIGURES`: the 3D view always, the states, the tracking
-    error and the attitude and motors when there was a flight."""
+    error and the attitude and motors when there was a flight (of a real drone's flight,
+    the tracking error alone: see :mod:`quadnav.hardware.run_record`)."""
     makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
                                 tracking_error_figure, attitude_motors_figure), strict=True))
-    return makers if run.flight is not None else {FIGURES[0]: flight_3d_figure}
+    if run.flight is None:
+        return {FIGURES[0]: flight_3d_figure}
+    if run.is_hardware:  # a tracked position: no timed reference, no motor commands
+        return {name: makers[name] for name in (FIGURES[0], FIGURES[2])}
+    return makers
