@@ -2,10 +2,13 @@
 
 The page (``quadnav view DIR``, ``quadnav fly --html``) shows the map (blocks in their
 colours, the boundary as a transparent box), the explored tree, the path in red, the
-trajectory coloured by speed, the flown track, start and goal, and a drone marker that a
-time slider moves along the flight; beside it, the metrics. Rotate by dragging, zoom with
-the wheel. No network is needed: the renderer (plain JavaScript drawing on a 2D canvas,
-package data in ``viewer/``) and the run's numbers (JSON) are written into the page.
+trajectory coloured by speed, the flown track, start and goal, and the drone's body box
+that a time slider moves along the flight; beside it, the metrics. It draws with three.js
+(WebGL, a depth buffer, so near things hide far ones) and its orbit controls: rotate by
+dragging, pan with shift or the right button, zoom with the wheel. No network is needed:
+three.js (vendored from the npm registry's ``three`` 0.147.0, MIT, in ``viewer/three/``
+with its licence), the viewer (``viewer/viewer.js``) and the run's numbers (JSON) are
+written into the page.
 """
 
 from __future__ import annotations
@@ -31,7 +34,10 @@ DECIMALS = 3
 QUATERNION_DECIMALS = 4
 _ASSETS = resources.files("quadnav.viz") / "viewer"
 #: The places in template.html that the page fills in.
-_TOKEN = re.compile(r"\{\{(TITLE|VIEWER_JS|RUN_DATA)\}\}")
+_TOKEN = re.compile(r"\{\{(TITLE|THREE_JS|VIEWER_JS|RUN_DATA)\}\}")
+#: The vendored three.js scripts, in the order they define ``THREE`` and its add-ons.
+THREE_SCRIPTS = ("three.min.js", "OrbitControls.js", "LineSegmentsGeometry.js",
+                 "LineGeometry.js", "LineMaterial.js", "LineSegments2.js", "Line2.js")
 
 
 def _numbers(values: np.ndarray, decimals: int = DECIMALS) -> list[float]:
@@ -68,6 +74,8 @@ def viewer_data(run: Run) -> dict:
     x, y, z, in m; speeds in m/s; times in s). ``path``, ``trajectory`` and ``flight`` are
     None for a run that found no path."""
     world, edges = run.world, run.tree_edges()
+    vehicle = run.parameters.get("vehicle", {})
+    arm = float(vehicle.get("arm_length", 0.0))
     data = {
         "title": run.title,
         "subtitle": _subtitle(run.metrics),
@@ -82,7 +90,8 @@ def viewer_data(run: Run) -> dict:
         "trajectory": None,
         "flight": None,
         "collision": bool(run.metrics.get("collision")),
-        "armLength": float(run.parameters.get("vehicle", {}).get("arm_length", 0.0)),
+        "armLength": arm,
+        "bodySize": [float(v) for v in vehicle.get("body_size", (2 * arm, 2 * arm, arm / 2))],
         "metrics": run.metrics,
     }
     if run.trajectory is not None:
@@ -111,6 +120,8 @@ def viewer_html(run: Run) -> str:
     data written in (no external references)."""
     data = viewer_data(run)
     parts = {"TITLE": html.escape(f"quadnav: {data['title']}"),
+             "THREE_JS": "\n;\n".join((_ASSETS / "three" / name).read_text(encoding="utf-8")
+                                      for name in THREE_SCRIPTS),
              "VIEWER_JS": (_ASSETS / "viewer.js").read_text(encoding="utf-8"),
              "RUN_DATA": _script_json(data)}
     template = (_ASSETS / "template.html").read_text(encoding="utf-8")
