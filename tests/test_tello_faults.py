@@ -256,3 +256,43 @@ def test_stop_signals_mid_move_stop_and_land(tmp_path, first, second):
     _, positions = drone.track()
     assert ROOM_START[0] + 0.5 < positions[-1, 0] < ROOM_GOAL[0] - 0.5  # stopped mid-move
     assert (tmp_path / "flight" / "tello_log.jsonl").exists()
+
+
+# --- a real Tello's imperfections --------------------------------------------------------------
+
+REAL = Faults.real_tello()
+
+
+@needs_netns
+@pytest.mark.parametrize("mode", ["waypoints", "rc"])
+def test_whole_missions_through_a_real_tellos_imperfections_land_inside_the_fence(
+        course, client_ns, tmp_path, mode):
+    """Moves that end off, a varying takeoff height, noisy velocities and lost replies: the
+    mission (the course's go moves; rc sticks along the room, the shorter flight) still ends
+    on the floor and never leaves the fence; when it lands, it lands near the goal."""
+    plan = course[-1] if mode == "waypoints" else planned_room()
+    outcome, _, drone = emulated_flight(plan, client_ns, tmp_path, mode, faults=REAL, seed=2)
+    assert outcome.status in (Status.LANDED, Status.STOPPED), outcome.message
+    _, positions = drone.track()
+    assert_kept_the_fence(plan, positions)
+    assert_on_the_floor(drone)
+    if outcome.status is Status.LANDED:
+        assert np.linalg.norm(positions[-1, :2] - plan.landing_ground[:2]) < 0.25
+
+
+@needs_netns
+def test_the_imperfections_are_drawn_from_the_seed(client_ns, tmp_path):
+    """The same seed: the same takeoff height (the highest point of this flight at the
+    start's 0.8 m, or above it) and the same moves; another seed: others."""
+    plan = planned_room()
+    ends = {}
+    for run, seed in enumerate((5, 5, 6)):
+        _, _, drone = emulated_flight(plan, client_ns, tmp_path / str(run),
+                                      faults=dataclasses.replace(REAL, drop_replies=0.0),
+                                      seed=seed)
+        _, positions = drone.track()
+        ends[run] = (positions[:, 2].max(), positions[-1, :2])
+    # the flight itself runs on the wall clock: equal to a centimetre or so, not to the bit
+    assert ends[0][0] == pytest.approx(ends[1][0], abs=0.01)
+    assert np.allclose(ends[0][1], ends[1][1], atol=0.02)
+    assert abs(ends[0][0] - ends[2][0]) > 0.05  # seed 5 takes off 15 cm lower than seed 6

@@ -17,7 +17,7 @@ import math
 import time
 from collections.abc import Callable
 
-from quadnav.cli.args import coordinate, heading_degrees, time_scale
+from quadnav.cli.args import add_seed_argument, coordinate, heading_degrees, time_scale
 from quadnav.cli.commands import command_help
 from quadnav.cli.tello_fly_command import add_tello_fly_command
 from quadnav.hardware.sdk import DEFAULT_HOST
@@ -26,14 +26,16 @@ from quadnav.limits import COORDINATE, HEADING_DEGREES, TIME_SCALE
 
 def emulate(args: argparse.Namespace) -> int:
     """Run the emulator until Ctrl-C (KeyboardInterrupt: exit 130 via the main entry)."""
-    from quadnav.hardware.emulator import TelloEmulator
+    from quadnav.hardware.emulator import Faults, TelloEmulator
 
+    faults = Faults.real_tello() if args.imperfect else None
     with TelloEmulator(host=args.host, start=tuple(args.start), yaw=math.radians(args.yaw),
-                       time_scale=args.time_scale) as emulator:
+                       time_scale=args.time_scale, faults=faults, seed=args.seed) as emulator:
+        imperfect = f", a real Tello's imperfections (seed {args.seed})" if faults else ""
         print(f"Emulated Tello at {emulator.host} (UDP 8889, state to the client's 8890), "
               f"start {tuple(args.start)} m, yaw {args.yaw:g} deg, time scale "
-              f"{args.time_scale:g}. Connect with djitellopy Tello(host={emulator.host!r}). "
-              "Ctrl-C to stop.", flush=True)
+              f"{args.time_scale:g}{imperfect}. Connect with djitellopy "
+              f"Tello(host={emulator.host!r}). Ctrl-C to stop.", flush=True)
         while True:
             time.sleep(1.0)
 
@@ -61,6 +63,11 @@ def add_emulate_command(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--time-scale", type=time_scale, default=1.0, metavar="K",
                         help=f"emulated seconds per wall-clock second, {TIME_SCALE.describe()} "
                              "(default: 1, real time)")
+    parser.add_argument("--imperfect", action="store_true",
+                        help="fly as a real Tello does: moves that end about 2 cm off per "
+                             "axis, a takeoff height of 0.7-0.9 m, vgx/vgy a unit off a quarter "
+                             "of the time, one reply in a hundred lost (drawn from --seed)")
+    add_seed_argument(parser, "seed of the imperfections")
     parser.set_defaults(handler=emulate)
 
 

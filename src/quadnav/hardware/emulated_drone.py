@@ -307,13 +307,13 @@ class EmulatedDrone:
         """World heading, rad."""
         return _world_yaw(self._state)
 
-    def takeoff(self) -> None:
-        """Start the motors and climb :data:`TAKEOFF_HEIGHT` (the drone must be landed)."""
+    def takeoff(self, height: float = TAKEOFF_HEIGHT) -> None:
+        """Start the motors and climb ``height`` m (the drone must be landed)."""
         self.flying = True
         self._memory = self._controller.new_memory()
         p = self.position
         self._set_setpoint(p, np.zeros(3), self.yaw)
-        self._begin(Line(p, p + np.array([0.0, 0.0, TAKEOFF_HEIGHT])), TAKEOFF_SPEED)
+        self._begin(Line(p, p + np.array([0.0, 0.0, height])), TAKEOFF_SPEED)
 
     def land(self) -> None:
         """Descend to the floor below the setpoint, then stop the motors."""

@@ -32,12 +32,18 @@ Faults for tests (:class:`Faults`): replies dropped with a probability, every re
 late, the link dead both ways after some seconds, a low battery, an aged battery that
 drains faster (so that it runs low in flight). Network faults are in
 wall-clock seconds (the client's clock); flight, battery and the auto-land timer in
-emulated seconds.
+emulated seconds. And the imperfections a real Tello shows (:meth:`Faults.real_tello`,
+from djitellopy's issues and the SDK notes), each drawn from the emulator's seed: a move
+(``go``, ``curve``, ``up`` ... ``back``) that ends a few centimetres off, a takeoff
+height that varies, ``vgx``/``vgy`` that read a unit off now and then, and lost replies.
+(``out of range`` for a move shorter than 20 cm on every axis is the SDK's own rule, which
+the emulator always keeps.)
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import ipaddress
 import math
 import socket
@@ -53,7 +59,7 @@ from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.hardware import sdk
-from quadnav.hardware.emulated_drone import FLIP_TIME, EmulatedDrone
+from quadnav.hardware.emulated_drone import FLIP_TIME, TAKEOFF_HEIGHT, EmulatedDrone
 from quadnav.hardware.netns import Link, NetNamespace
 from quadnav.hardware.sdk import (
     AUTO_LAND_AFTER,
@@ -109,6 +115,12 @@ class Faults:
             (>= 1; an aged battery's charge falls faster under load; idle, it drains as a
             new one, and the drone lands by itself
             once it reports less than :data:`~quadnav.hardware.sdk.LOW_BATTERY` percent).
+        move_error_m: standard deviation, m, of where a move ends, per axis (the end of a
+            ``go``, ``curve`` or ``up`` ... ``back`` is off by a normal draw).
+        takeoff_spread_m: ``takeoff`` climbs to :data:`~quadnav.hardware.
+            emulated_drone.TAKEOFF_HEIGHT` plus a uniform draw in +- this, m.
+        velocity_noise: probability that ``vgx`` and that ``vgy`` of a state packet read
+            one unit (dm/s) off, either way.
     """
 
     drop_replies: float = 0.0
@@ -116,6 +128,17 @@ class Faults:
     dead_after_s: float | None = None
     battery: float = 100.0
     battery_drain: float = 1.0
+    move_error_m: float = 0.0
+    takeoff_spread_m: float = 0.0
+    velocity_noise: float = 0.0
+
+    @classmethod
+    def real_tello(cls) -> Faults:
+        """What a real Tello shows, as reported in djitellopy's issues and the SDK notes:
+        ``go`` ends about 2 cm off per axis, takeoff leaves it 0.7-0.9 m up, a quarter of
+        the velocity readings are a unit off, one reply in a hundred is lost."""
+        return cls(drop_replies=0.01, move_error_m=0.02, takeoff_spread_m=0.1,
+                   velocity_noise=0.25)
 
     def __post_init__(self) -> None:
         require([
@@ -131,7 +154,14 @@ class Faults:
              f"Tello emulator fault battery {self.battery}: expected 0 to 100 percent"),
             (math.isfinite(self.battery_drain) and 1 <= self.battery_drain <= 1000,
              f"Tello emulator fault battery_drain {self.battery_drain}: expected 1 to 1000 "
-             "times a new battery's")])
+             "times a new battery's"),
+            (0 <= self.move_error_m <= 0.2,
+             f"Tello emulator fault move_error_m {self.move_error_m}: expected 0 to 0.2 m"),
+            (0 <= self.takeoff_spread_m <= 0.3,
+             f"Tello emulator fault takeoff_spread_m {self.takeoff_spread_m}: expected 0 to "
+             "0.3 m"),
+            (0 <= self.velocity_noise <= 1,
+             f"Tello emulator fault velocity_noise {self.velocity_noise}: expected 0 to 1")])
 
 
 def check_host(host: str) -> str:
@@ -178,7 +208,8 @@ class TelloEmulator:
         time_scale: emulated seconds per wall-clock second (> 0): motions, the battery,
             the flight time and the auto-land timer run this much faster.
         faults: injected faults (default: none).
-        seed: seed of the dropped replies.
+        seed: seed of the dropped replies and the imperfections (each drawn from a
+            stream of its own, so a flight's moves and takeoff repeat for a seed).
         client_netns: the network namespace of the client (default: the caller's). For
             djitellopy in this process, :func:`djitellopy_namespace`.
     """
@@ -197,6 +228,8 @@ class TelloEmulator:
         self._drone = EmulatedDrone(start_point, yaw, battery=self.faults.battery,
                                     battery_drain=self.faults.battery_drain)
         self._rng = np.random.default_rng(seed)
+        self._move_rng, self._takeoff_rng, self._velocity_rng = (
+            np.random.default_rng([seed, stream]) for stream in (1, 2, 3))
         self._client_netns = client_netns
         self._lock = threading.Lock()
         self._stopping = threading.Event()
@@ -317,7 +350,8 @@ class TelloEmulator:
                 self._flush(now)
                 if self._client is not None and now >= next_state:
                     next_state = max(next_state + STATE_PERIOD, now)
-                    state = sdk.format_state(self._drone.telemetry(self._mission_pads))
+                    state = sdk.format_state(self._noisy(
+                        self._drone.telemetry(self._mission_pads)))
                     self._send(state, (self._client[0], STATE_PORT))
 
     # --- protocol (called with the lock held) ---------------------------------------
@@ -411,20 +445,37 @@ class TelloEmulator:
     def _start_motion(self, name: str, args: tuple[int | str, ...]) -> None:
         drone = self._drone
         if name == "takeoff":
-            drone.takeoff()
+            spread = self.faults.takeoff_spread_m
+            drone.takeoff(TAKEOFF_HEIGHT + spread * self._takeoff_rng.uniform(-1.0, 1.0))
         elif name == "land":
             drone.land()
         elif name in _DIRECTIONS:
-            drone.move(np.multiply(_DIRECTIONS[name], args[0]) / 100.0, self._speed / 100.0)
+            offset = np.multiply(_DIRECTIONS[name], args[0]) / 100.0
+            drone.move(offset + self._move_error(), self._speed / 100.0)
         elif name in ("cw", "ccw"):
             drone.turn(math.radians(args[0]) * (-1.0 if name == "cw" else 1.0))
         elif name == "go":
-            drone.move(np.array(args[:3], dtype=float) / 100.0, args[3] / 100.0)
+            drone.move(np.array(args[:3], dtype=float) / 100.0 + self._move_error(),
+                       args[3] / 100.0)
         elif name == "curve":
             points = np.array(args[:6], dtype=float).reshape(2, 3) / 100.0
-            drone.curve(points[0], points[1], args[6] / 100.0)
+            drone.curve(points[0], points[1] + self._move_error(), args[6] / 100.0)
         else:  # flip
             drone.pause(FLIP_TIME)
+
+    def _move_error(self) -> FloatArray:
+        """Where the next move ends off its target, (3,) m, heading frame."""
+        return self._move_rng.normal(0.0, self.faults.move_error_m, 3)
+
+    def _noisy(self, telemetry: sdk.Telemetry) -> sdk.Telemetry:
+        """``telemetry`` with ``vgx`` and ``vgy`` each a unit off at the fault's rate."""
+        if not self.faults.velocity_noise:
+            return telemetry
+        off = self._velocity_rng.random(2) < self.faults.velocity_noise
+        units = np.where(off, self._velocity_rng.choice((-1, 1), 2), 0)
+        vgx, vgy, vgz = telemetry.velocity
+        return dataclasses.replace(telemetry, velocity=(vgx + int(units[0]),
+                                                        vgy + int(units[1]), vgz))
 
     def _cancel(self) -> None:
         """End the motion in progress, if any: its reply is :data:`STOPPED`."""
