@@ -85,7 +85,9 @@ def _draw_run(ax: Axes, run: Run) -> list:
                                      f"({run.trajectory.t[-1]:.2f} s)")
     if flight is not None:
         handles += plot_points(ax, flight.position, color=FLOWN_COLOR, linewidth=1.0,
-                               zorder=22, label=f"flown ({flight.t[-1]:.2f} s)")
+                               zorder=22,
+                               label=f"flown{', dead reckoning' if run.is_hardware else ''} "
+                                     f"({flight.t[-1]:.2f} s)")
         if metrics["ending"] == Ending.COLLISION.value:
             handles += plot_points(ax, flight.position[-1:], color=COLLISION_COLOR,
                                    marker="X", markersize=13, markeredgecolor="black",
@@ -99,8 +101,9 @@ def flight_3d_figure(run: Run) -> Figure:
     """The map, the explored tree, the path (red, dashed, outlined), the trajectory and
     the flown track seen obliquely (3D) and from above (2D, to scale), a cross where a
     collision stopped the flight, one legend below both; the title gives the map (a
-    track: the reference), the outcome, the RMS tracking error and the top speed (not
-    for a track). A run without a path shows the map and the tree."""
+    track: the reference), the outcome, the RMS tracking error (a real drone's: from
+    the planned route) and the top speed (not for a track). A run without a path shows
+    the map and the tree."""
     metrics = run.metrics
     fig, oblique, top = two_views(run.world, (12, 7))
     handles = _draw_run(oblique, run)
@@ -109,7 +112,9 @@ def flight_3d_figure(run: Run) -> Figure:
                fontsize=SMALL_FONT)
     summary = run_outcome(metrics)
     if run.flight is not None:
-        summary += f": RMS tracking error {CM_PER_M * metrics['rms_tracking_error_m']:.2f} cm"
+        error = CM_PER_M * metrics["rms_tracking_error_m"]
+        summary += (f": dead-reckoned track {error:.2f} cm RMS from the planned route"
+                    if run.is_hardware else f": RMS tracking error {error:.2f} cm")
         if not run.is_track:
             summary += f", top speed {metrics['speed_m_s']:g} m/s"
     fig.suptitle(f"{run.title}\n{summary}", fontsize=TITLE_FONT)
