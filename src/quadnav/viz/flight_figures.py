@@ -36,7 +36,7 @@ from quadnav.viz.style import (
     TRAJECTORY_COLOR,
     outlined,
 )
-from quadnav.viz.topview import draw_map, plot_points, two_views
+from quadnav.viz.topview import draw_fence_top, draw_map, plot_points, two_views
 
 CM_PER_M = 100.0
 #: Least height of a states plot's y range, m or m/s, so that an axis barely moving is
@@ -102,12 +102,14 @@ def flight_3d_figure(run: Run) -> Figure:
     the flown track seen obliquely (3D) and from above (2D, to scale), a cross where a
     collision stopped the flight, one legend below both; the title gives the map (a
     track: the reference), the outcome, the RMS tracking error (a real drone's: from
-    the planned route) and the top speed (not for a track). A run without a path shows
-    the map and the tree."""
+    the planned route, and its geofence dotted in the top view) and the top speed (not
+    for a track). A run without a path shows the map and the tree."""
     metrics = run.metrics
     fig, oblique, top = two_views(run.world, (12, 7))
     handles = _draw_run(oblique, run)
     _draw_run(top, run)
+    if run.is_hardware:  # where the bridge kept the drone
+        handles.append(draw_fence_top(top, run.world, run.metrics["margin_m"]))
     map_legend(fig, run.world, handles, loc="outside lower center", ncol=3,
                fontsize=SMALL_FONT)
     summary = run_outcome(metrics)

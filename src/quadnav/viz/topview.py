@@ -17,6 +17,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from mpl_toolkits.mplot3d import Axes3D
 
+from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world
 from quadnav.viz.style import GOAL_COLOR, START_COLOR
 from quadnav.world.model import World
@@ -29,6 +30,8 @@ PAD = 0.02
 WIDE = 2.0
 #: Inches of a top view's height beyond the map's own, for its title and x labels.
 TOP_MARGIN = 1.0
+#: Colour of a geofence's outline.
+FENCE_COLOR = "#444444"
 
 
 def plot_points(ax: Axes, points: np.ndarray, **style) -> list[Line2D]:
@@ -66,6 +69,19 @@ def draw_world_top(ax: Axes, world: World, start: np.ndarray | None = None,
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     return handles
+
+
+def draw_fence_top(ax: Axes, world: World, margin: float) -> Line2D:
+    """The geofence of ``world`` at ``margin`` m seen from above, dashed: the boundary
+    shrunk and every block grown by the margin (their outlines); returns the line."""
+    fence = world.inflate(margin)
+    boxes = np.vstack([fence.boundary, fence.blocks])
+    corners = np.stack([boxes[:, [0, 1]], boxes[:, [3, 1]], boxes[:, [3, 4]], boxes[:, [0, 4]],
+                        boxes[:, [0, 1]]], axis=1)
+    return draw_polylines(ax, np.concatenate([corners, np.zeros((*corners.shape[:2], 1))],
+                                             axis=2),
+                          color=FENCE_COLOR, linestyle=":", linewidth=0.9, zorder=3,
+                          label=f"geofence ({margin:g} m in)")
 
 
 def draw_map(ax: Axes, world: World, start: np.ndarray | None = None,
