@@ -34,7 +34,12 @@ from quadnav.cli.tello_fly_command import ipv4, percent, tello_speed
 from quadnav.hardware import sdk
 from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, Status, fly
 from quadnav.hardware.dead_reckoning import DeadReckoning, clip_step
-from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, TRACKING_ALLOWANCE, plan_flight
+from quadnav.hardware.flight_plan import (
+    TAKEOFF_HEIGHT,
+    TRACKING_ALLOWANCE,
+    SavedPlan,
+    plan_flight,
+)
 from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body, to_cm, to_m
 from quadnav.hardware.geofence import Geofence, GeofenceError
 from quadnav.hardware.lost_link import LostLinkBound
@@ -55,7 +60,8 @@ from quadnav.hardware.rc import (
     tracking_velocity,
 )
 from quadnav.runs import read_run
-from quadnav.world import World
+from quadnav.trajectory.sampled import read_reference_file
+from quadnav.world import World, load_world
 
 ALWAYS = lambda start, end, segments: True  # noqa: E731  (a geofence that allows all)
 
@@ -324,6 +330,40 @@ def test_a_saved_path_is_flown_as_given_through_the_same_checks(tmp_path):
     saved.write_text("x,y\n1,2\n")
     assert_user_error(run("tello", "fly", room, "--path", saved, "--dry-run",
                           "-o", tmp_path / "refused"), f"{saved}:1:", "x,y,z")
+
+
+def test_a_saved_trajectory_is_followed_as_timed_through_the_same_checks(tmp_path):
+    room = tmp_path / "room.txt"
+    room.write_text(ROOM)
+    assert run("plan", room, "--start", "0.5", "1", "0.8", "--goal", "3.5", "1", "0.8",
+               "--margin", "0.3", "--quiet", "-o", tmp_path / "p").returncode == 0
+    assert run("traj", room, "--path", tmp_path / "p" / "path.csv", "--speed", "0.5",
+               "-o", tmp_path / "t").returncode == 0
+    saved = tmp_path / "t" / "trajectory.csv"
+    reference = read_reference_file(saved)
+    plan = plan_flight(load_world(room), None, None, MARGIN, 0.0,
+                       saved=SavedPlan(reference.samples.position, str(saved), reference.motion))
+    begin, end = plan.trajectory.main_window
+    assert end - begin == pytest.approx(reference.duration)
+    t = np.linspace(0.0, reference.duration, 50)
+    assert np.allclose(plan.trajectory.position(begin + t), reference.position(t), atol=1e-9)
+    result = run("tello", "fly", room, "--trajectory", saved, "--mode", "rc", "--dry-run",
+                 "--quiet", "-o", tmp_path / "rc")
+    assert result.returncode == 0, result.stderr
+    assert "rc commands" in result.stdout
+
+    floor = tmp_path / "floor.csv"  # a trajectory from the floor: inside the margin
+    rows = (tmp_path / "t" / "trajectory.csv").read_text().splitlines()
+    first = rows[1].split(",")
+    first[3] = "0"
+    floor.write_text("\n".join([rows[0], ",".join(first), *rows[2:]]) + "\n")
+    assert_user_error(run("tello", "fly", room, "--trajectory", floor, "--dry-run",
+                          "-o", tmp_path / "refused"),
+                      f"{floor}: the trajectory starts at (0.5, 1, 0), inside the 0.3 m margin",
+                      "fly its path with --path")
+    assert_user_error(run("tello", "fly", room, "--trajectory", saved, "--path", saved,
+                          "--dry-run", "-o", tmp_path / "refused"), "give one saved plan")
+    assert not (tmp_path / "refused").exists()
 
 
 def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, tmp_path):

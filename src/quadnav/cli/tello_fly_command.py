@@ -39,7 +39,12 @@ from quadnav.hardware.bridge import (
     Status,
     fly,
 )
-from quadnav.hardware.flight_plan import TRACKING_ALLOWANCE, NoPathError, plan_flight
+from quadnav.hardware.flight_plan import (
+    TRACKING_ALLOWANCE,
+    NoPathError,
+    SavedPlan,
+    plan_flight,
+)
 from quadnav.hardware.link import TELLO_IP
 from quadnav.hardware.rc import RC_FULL_SPEED
 from quadnav.hardware.run_record import tello_run_content
@@ -52,6 +57,7 @@ from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.runs import RUN_FILES
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.pathfile import read_path_csv
+from quadnav.trajectory.sampled import read_reference_file
 from quadnav.world import load_world
 
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
@@ -99,6 +105,23 @@ def exit_code(outcome: Outcome) -> int:
     return _EXIT_CODES[outcome.status]
 
 
+def _saved_plan(args: argparse.Namespace) -> SavedPlan | None:
+    """The saved path or trajectory the flags name, or None: plan one."""
+    if args.path is None and args.trajectory is None:
+        return None
+    flag, file = ("--path", args.path) if args.path is not None else (
+        "--trajectory", args.trajectory)
+    if args.path is not None and args.trajectory is not None:
+        raise QuadnavError("--path and --trajectory: give one saved plan")
+    if any(v is not None for v in (args.start, args.goal, args.start_goal)):
+        raise QuadnavError(f"{flag} {file}: its ends are the start and goal; leave out "
+                           "--start, --goal and --start-goal")
+    if args.path is not None:
+        return SavedPlan(read_path_csv(args.path), args.path)
+    reference = read_reference_file(args.trajectory)
+    return SavedPlan(reference.samples.position, args.trajectory, reference.motion)
+
+
 def tello_fly(args: argparse.Namespace) -> int:
     """Plan, check and fly (or print) the mission; the exit code says how it ended."""
     get_planner(args.planner)
@@ -106,12 +129,9 @@ def tello_fly(args: argparse.Namespace) -> int:
                               time_scale=args.time_scale)
     folder = check_output_folder(args.output)
     world = load_world(args.map)
-    if args.path is not None:
-        if any(v is not None for v in (args.start, args.goal, args.start_goal)):
-            raise QuadnavError(f"--path {args.path}: the path's ends are the start and goal; "
-                               "leave out --start, --goal and --start-goal")
+    saved = _saved_plan(args)
+    if saved is not None:
         start = goal = None
-        saved = (read_path_csv(args.path), args.path)
     else:
         start, goal = resolve_start_goal(args, world)
         saved = None
@@ -176,6 +196,14 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         "it goes through the same checks (every segment keeps the margin plus "
                         f"{TRACKING_ALLOWANCE:g} m, except the legs out of and into the margin "
                         "at a start or goal inside it)")
+    p.add_argument("--trajectory", metavar="FILE",
+                   help="fly this saved trajectory (a 'quadnav traj' trajectory.csv, or the "
+                        "course's MP.csv read at 20 Hz) instead of planning one: its first "
+                        "and last samples are the start and goal, which must be at rest "
+                        "outside the margin; its samples' path goes through the same checks "
+                        "as --path, and the trajectory itself through the geofence's; rc mode "
+                        "follows it as timed, waypoints mode flies go moves through its "
+                        "corners")
     p.add_argument("--mode", choices=MODES, default="waypoints",
                    help="'go' moves through the path's corners, or 'rc' sticks at 20 Hz "
                         "following the trajectory (default: waypoints)")

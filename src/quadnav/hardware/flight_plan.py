@@ -27,6 +27,10 @@ the generator's leg speed (unless it lies in the free space of the planning marg
 zone vertex kept), rounded to whole centimetres where the moves stay (see
 :meth:`FlightPlan.go_moves`). Every column, move and densely sampled trajectory point is
 checked, the zones' against their room, the rest against the fence.
+
+A plan made elsewhere (:class:`SavedPlan`: a saved path, or a saved trajectory that
+``rc`` mode follows as timed) replaces the planner's result and goes through the same
+shaping and checks.
 """
 
 from __future__ import annotations
@@ -70,6 +74,8 @@ from quadnav.world.placement import format_point
 
 #: The planner name of a saved path flown as given (:func:`saved_plan`).
 SAVED_PLANNER = "saved path"
+#: Fastest a saved trajectory may start or end, m/s: it starts and ends at rest.
+AT_REST = 0.05
 #: Height the Tello's ``takeoff`` leaves it at, about, metres above the floor.
 TAKEOFF_HEIGHT = 0.8
 #: Extra margin the path keeps beyond the geofence's, metres.
@@ -82,6 +88,24 @@ _ROUNDINGS = np.array(list(itertools.product((0.0, 1.0), repeat=3)))
 
 class NoPathError(QuadnavError):
     """The planner found no path within its budget."""
+
+
+@dataclass(frozen=True, eq=False)
+class SavedPlan:
+    """A plan made elsewhere, flown instead of planning one (``tello fly --path`` and
+    ``--trajectory``).
+
+    Attributes:
+        points: (N >= 2, 3) its path, m, from the start to the goal (a saved trajectory's:
+            its samples' positions).
+        source: the file it came from, for messages.
+        motion: a saved trajectory's motion, which ``rc`` mode follows as timed; None for
+            a path (every corner of which ``go`` moves keep).
+    """
+
+    points: FloatArray
+    source: str
+    motion: Trajectory | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -395,21 +419,26 @@ def _route(problem: PlanningProblem, path: FloatArray, fence: Geofence,
 
 
 def _trajectory(takeoff: FloatArray, route: Route, settings: TrajectorySettings,
-                space: SafeSpace) -> Trajectory:
+                space: SafeSpace, motion: Trajectory | None = None) -> Trajectory:
     """The trajectory from ``takeoff`` (3,) through ``route``: each zone (the start's
     from ``takeoff``) straight from rest to rest at :data:`~quadnav.trajectory.generate.
     LEG_SLOW_DOWN` of the limits, as the generator flies legs, unless it lies in the free
-    space of ``space``'s margin; between them, the generator's trajectory in ``space``."""
+    space of ``space``'s margin; between them, the generator's trajectory in ``space``
+    (or a saved ``motion`` from the route's start to its end, the zones then always
+    flown straight)."""
     start_zone, middle, goal_zone = route.parts()
     start_zone = distinct([takeoff, *start_zone])
 
     def flown_straight(zone: FloatArray) -> list[Trajectory] | None:
         """The zone's straight pieces, or None when it lies in the free space."""
-        if space.inflated.segments_free(np.stack([zone[:-1], zone[1:]], axis=1)).all():
+        if motion is None and space.inflated.segments_free(
+                np.stack([zone[:-1], zone[1:]], axis=1)).all():
             return None
         return leg_pieces(zone, settings)
 
     first, last = flown_straight(start_zone), flown_straight(goal_zone)
+    if motion is not None:
+        return join_legs(first, [motion], last, settings)
     points = distinct(np.vstack([start_zone if first is None else start_zone[-1:],
                                   middle[1:-1],
                                   goal_zone if last is None else goal_zone[:1]]))
@@ -442,12 +471,31 @@ def saved_plan(problem: PlanningProblem, path: ArrayLike, source: str) -> PlanRe
                       np.zeros(0, dtype=np.int64), stats, 0)
 
 
+def _check_saved_motion(problem: PlanningProblem, saved: SavedPlan) -> None:
+    """A saved trajectory starts and ends at rest outside the margin; else QuadnavError
+    naming its file."""
+    motion = saved.motion
+    for leg, point, end, t in ((problem.start_leg, problem.start, "starts", 0.0),
+                               (problem.goal_leg, problem.goal, "ends", motion.duration)):
+        if len(leg) > 1:
+            raise QuadnavError(
+                f"{saved.source}: the trajectory {end} at {format_point(point)}, "
+                f"inside the {problem.margin:g} m margin (the margin plus "
+                f"{TRACKING_ALLOWANCE:g} m for tracking): a saved trajectory must start and "
+                "end outside it (the takeoff and landing columns reach it); fly its path "
+                "with --path, which leaves and enters the margin by quadnav's legs")
+        speed = float(np.linalg.norm(motion.velocity(t)))
+        if speed > AT_REST:
+            raise QuadnavError(f"{saved.source}: the trajectory {end} at {speed:.3g} m/s: "
+                               f"expected it to {end[:-1]} at rest (at most {AT_REST:g} m/s)")
+
+
 def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
                 margin: float, yaw: float, planner: str = "rrtstar",
                 planning: PlannerSettings | None = None,
                 trajectory: TrajectorySettings | None = None,
                 progress: Progress | None = None,
-                saved: tuple[FloatArray, str] | None = None) -> FlightPlan:
+                saved: SavedPlan | None = None) -> FlightPlan:
     """Plan, shape and check a flight (see the module's description).
 
     Args:
@@ -461,9 +509,11 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
         trajectory: generator and limits; ``v_max`` is the cruise speed; the timing is
             always :data:`TELLO_TIMING`.
         progress: called with (fraction of the planning budget, best length m).
-        saved: a saved path (N, 3) m and the file it came from, flown instead of a
-            planned one (see :func:`saved_plan`), through the same checks, every corner
-            kept (``go`` moves are not pruned to fewer).
+        saved: a saved path or trajectory, flown instead of a planned one (see
+            :func:`saved_plan`) through the same checks: a path with every corner kept
+            (``go`` moves are not pruned to fewer), a trajectory as timed (``rc`` mode;
+            ``go`` moves through its path's corners), which must start and end at rest
+            outside the margin (the takeoff and landing columns reach it).
 
     Raises:
         QuadnavError: a bad query or saved path; NoPathError: no path; GeofenceError: a
@@ -471,25 +521,29 @@ def plan_flight(world: World, start: ArrayLike | None, goal: ArrayLike | None,
     """
     trajectory = (trajectory or TrajectorySettings()).replace(timing=TELLO_TIMING)
     if saved is not None:
-        start = saved[0][0] if start is None else start
-        goal = saved[0][-1] if goal is None else goal
+        start = saved.points[0] if start is None else start
+        goal = saved.points[-1] if goal is None else goal
     with warnings.catch_warnings():  # the legs are flown as legs: no need to warn
         warnings.simplefilter("ignore", PlanningWarning)
         problem = make_problem(world, start, goal, margin + TRACKING_ALLOWANCE)
     if saved is not None:
-        result = saved_plan(problem, *saved)
+        result = saved_plan(problem, saved.points, saved.source)
+        if saved.motion is not None:
+            _check_saved_motion(problem, saved)
     else:
         result = plan(problem, planning, planner, progress)
         if not result.solved:
             raise NoPathError(f"{world.name}: no path found: {result.message}")
         result = refine(problem, result)
     fence = Geofence(world, margin)
-    route, pruned = _route(problem, result.path, fence, pruned=saved is None)
+    keep_corners = saved is not None and saved.motion is None
+    route, pruned = _route(problem, result.path, fence, pruned=not keep_corners)
     frame = TakeoffFrame.under(problem.start, yaw)
     # Checked before the trajectory is made: the first refusal is the clearest.
     check_route(fence, leg_rooms(fence, problem), frame, route, pruned)
     reference = _trajectory(frame.to_map([0.0, 0.0, TAKEOFF_HEIGHT]), route, trajectory,
-                            SafeSpace(world, problem.margin))
+                            SafeSpace(world, problem.margin),
+                            None if saved is None else saved.motion)
     flight = FlightPlan(problem, result, fence, frame, route, pruned, reference,
                         trajectory.v_max)
     flight.check()
