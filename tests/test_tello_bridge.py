@@ -32,7 +32,9 @@ from tellotools import (
 
 from quadnav.cli.tello_fly_command import ipv4, percent, tello_speed
 from quadnav.hardware import sdk
+from quadnav.hardware.arc import Arc
 from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, Status, fly
+from quadnav.hardware.curves import TOLERANCE_CM, Curve
 from quadnav.hardware.dead_reckoning import DeadReckoning, clip_step
 from quadnav.hardware.flight_plan import (
     TAKEOFF_HEIGHT,
@@ -59,7 +61,9 @@ from quadnav.hardware.rc import (
     stick_velocity,
     tracking_velocity,
 )
+from quadnav.planning import PlannerSettings
 from quadnav.runs import read_run
+from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.sampled import read_reference_file
 from quadnav.world import World, load_world
 
@@ -366,6 +370,34 @@ def test_a_saved_trajectory_is_followed_as_timed_through_the_same_checks(tmp_pat
     assert not (tmp_path / "refused").exists()
 
 
+def test_curves_follow_the_trajectory_within_the_tolerance_inside_the_fence():
+    """On a curved trajectory (the forest's: it climbs and dips between waypoints), the
+    curves mode flies arcs that stay within 5 cm of it and every centimetre in the fence,
+    with a few dozen commands where rc needs thousands."""
+    world = load_world("forest")
+    plan = plan_flight(world, world.start, world.goal, MARGIN, 0.0,
+                       planning=PlannerSettings(seed=0, max_iterations=3000, time_limit=10),
+                       trajectory=TrajectorySettings(v_max=0.5, a_max=1.0))
+    commands = plan.curve_moves(TAKEOFF_HEIGHT, plan.speed)
+    arcs = [c for c in commands if isinstance(c, Curve)]
+    assert arcs and len(commands) < 40
+    for command in commands:
+        sdk.parse_command(command.command)  # within the SDK's limits (radius included)
+    # Replay the commands in the takeoff frame from the takeoff and check each arc against
+    # the trajectory and the fence, independently of the fitting.
+    here = np.array([0.0, 0.0, 100.0 * TAKEOFF_HEIGHT])
+    track = 100.0 * plan.frame.to_body(plan.trajectory.position(
+        np.linspace(0.0, plan.trajectory.duration, 20_000)))
+    for command in commands:
+        if isinstance(command, Curve):
+            arc = Arc(here, here + command.via, here + command.end)
+            points = arc.at(np.linspace(0.0, arc.length, 200))[0]
+            assert plan.fence.contains(plan.frame.cm_to_map(points)).all()
+            near = np.linalg.norm(points[:, None, :] - track[None, ::10], axis=2).min(axis=1)
+            assert near.max() < TOLERANCE_CM + 2.0  # the trajectory sampled every ~1 cm
+        here = here + command.step
+
+
 def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, tmp_path):
     *_, plan = course
     out = io.StringIO()
@@ -416,11 +448,11 @@ def test_cli_refuses_a_plan_outside_the_fence(tmp_path):
 
 
 @needs_netns
-@pytest.mark.parametrize("mode", ["waypoints", "rc"])
+@pytest.mark.parametrize("mode", ["waypoints", "curves", "rc"])
 def test_whole_mission_on_the_emulator(request, client_ns, tmp_path, mode):
     # rc on the course takes 84 s of drone time (its dry run above): the room's is shorter,
     # and flown at half the time scale, as the rc feedback runs at 20 Hz of drone time.
-    if mode == "waypoints":
+    if mode != "rc":
         *_, plan = request.getfixturevalue("course")
         scale = 10.0
     else:
@@ -436,6 +468,9 @@ def test_whole_mission_on_the_emulator(request, client_ns, tmp_path, mode):
     assert names[:2] == ["command", "takeoff"] and names[-1] == "land"
     if mode == "waypoints":
         assert set(names[2:-1]) == {"go"}
+    elif mode == "curves":
+        assert set(names[2:-1]) == {"go", "curve"}
+        assert len(names) - 3 <= 2 * len(plan.go_moves(TAKEOFF_HEIGHT, 50))
     else:
         # (The 20 Hz schedule is checked by the dry run: here a busy machine may delay it.)
         # The dead-reckoned estimate followed the emulated drone to within a few cm.

@@ -205,8 +205,9 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         "follows it as timed, waypoints mode flies go moves through its "
                         "corners")
     p.add_argument("--mode", choices=MODES, default="waypoints",
-                   help="'go' moves through the path's corners, or 'rc' sticks at 20 Hz "
-                        "following the trajectory (default: waypoints)")
+                   help="'go' moves through the path's corners; 'curve' and 'go' commands "
+                        "following the trajectory within 5 cm (curves); or 'rc' sticks at 20 "
+                        "Hz following the trajectory (default: waypoints)")
     p.add_argument("--yaw", type=heading_degrees, default=0.0, metavar="DEG",
                    help="map heading the drone faces on the floor, counter-clockwise from "
                         f"+x, {HEADING_DEGREES.describe()} (default: 0, facing +x)")

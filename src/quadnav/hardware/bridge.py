@@ -8,6 +8,9 @@ refused and nothing flies); ``takeoff``; then
 * ``waypoints`` mode: the ``go`` moves through the pruned route, made from the height the
   drone reports after takeoff (it is only *about* 0.8 m), each sent once the one before
   has answered ``ok``;
+* ``curves`` mode: as ``waypoints`` through the start's and the goal's zones, and between
+  them ``curve`` and ``go`` commands that follow the trajectory within a few centimetres
+  (:mod:`quadnav.hardware.curves`), every centimetre of each checked against the fence;
 * ``rc`` mode: ``rc`` sticks at ``rc_rate`` Hz (drone time) from the trajectory's
   velocity plus a correction towards its position from the dead-reckoned estimate (a
   dry run's drone flies the sticks exactly; see :mod:`quadnav.hardware.rc`), each
@@ -53,6 +56,7 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
+from quadnav.hardware.curves import Curve
 from quadnav.hardware.dead_reckoning import DeadReckoning
 from quadnav.hardware.drone_clock import Clock, VirtualClock
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
@@ -83,7 +87,7 @@ from quadnav.signals import signal_of
 from quadnav.world.placement import format_point
 
 #: Flight modes.
-MODES = ("waypoints", "rc")
+MODES = ("waypoints", "curves", "rc")
 #: Least battery, percent, to take off with.
 MIN_BATTERY = 20
 #: Drone seconds a full battery flies (a Tello's is about 13 minutes), and the flight
@@ -268,15 +272,21 @@ class _Flight:
     # --- flying --------------------------------------------------------------------------
 
     def _go(self) -> str:
-        """Fly the ``go`` moves; returns what was done, for the outcome."""
+        """Fly the ``go`` moves (``curves`` mode: and the ``curve`` commands); returns
+        what was done, for the outcome."""
         height = (self.link.get_height() / 100.0 if self.link.reports_state
                   else TAKEOFF_HEIGHT)
-        moves = self.plan.go_moves(height, go_speed(self.plan.speed))
-        self.if_lost = "finishes the go move it flies (inside the geofence), hovers"
+        curving = self.settings.mode == "curves"
+        moves = (self.plan.curve_moves(height, self.plan.speed) if curving
+                 else self.plan.go_moves(height, go_speed(self.plan.speed)))
+        self.if_lost = (f"finishes the {'move' if curving else 'go move'} it flies (inside "
+                        "the geofence), hovers")
         for move in moves:
             self.link.command(move.command,
                               self._timeout(MOVE_FACTOR * move.duration + MOVE_SETTLE))
-        return f"{len(moves)} go moves"
+        curves = sum(isinstance(move, Curve) for move in moves)
+        return (f"{len(moves) - curves} go moves and {curves} "
+                f"curve{'' if curves == 1 else 's'}" if curving else f"{len(moves)} go moves")
 
     def _follow(self) -> str:
         """Follow the trajectory with ``rc`` sticks within the lost-link bound; returns
@@ -477,6 +487,8 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
     slowed = None
     if settings.mode == "waypoints":  # moves the SDK cannot fly: refused before anything
         plan.go_moves(TAKEOFF_HEIGHT, go_speed(plan.speed))
+    elif settings.mode == "curves":
+        plan.curve_moves(TAKEOFF_HEIGHT, plan.speed)
     else:
         slowed = rc_pace(plan, settings)
     folder = Path(folder)

@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.control.cascade import cascade_controller
 from quadnav.control.gains import Gains
+from quadnav.hardware.arc import Arc
 from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
 from quadnav.sim.settings import SimSettings
@@ -153,34 +154,6 @@ class Line:
         count = len(s)
         return (self.start + s[:, None] * self.direction, np.tile(self.direction, (count, 1)),
                 np.zeros((count, 3)))
-
-
-class Arc:
-    """The circular arc from ``start`` through ``via`` to ``end`` (each (3,), m, not in
-    a line)."""
-
-    def __init__(self, start: ArrayLike, via: ArrayLike, end: ArrayLike) -> None:
-        p0, p1, p2 = (np.asarray(p, dtype=np.float64) for p in (start, via, end))
-        a, b = p1 - p0, p2 - p0
-        normal = np.cross(a, b)
-        self.centre = p0 + (a @ a * np.cross(b, normal) + b @ b * np.cross(normal, a)) / (
-            2.0 * (normal @ normal))
-        self.radius = float(np.linalg.norm(p0 - self.centre))
-        self.e1 = (p0 - self.centre) / self.radius
-        self.e2 = np.cross(normal / np.linalg.norm(normal), self.e1)
-        self.length = self.radius * self.angle_of(p2)
-
-    def angle_of(self, point: FloatArray) -> float:
-        """Angle, rad in [0, 2 pi), of ``point`` (3,) on the circle from the start."""
-        r = point - self.centre
-        return float(np.arctan2(r @ self.e2, r @ self.e1) % (2 * math.pi))
-
-    def at(self, s: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        theta = (s / self.radius)[:, None]
-        c, d = np.cos(theta), np.sin(theta)
-        radial = c * self.e1 + d * self.e2
-        return (self.centre + self.radius * radial, -d * self.e1 + c * self.e2,
-                -radial / self.radius)
 
 
 #: The profile of no motion at all.

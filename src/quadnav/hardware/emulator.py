@@ -531,6 +531,7 @@ def _warm_up() -> None:
     """Compile (or load) the flight's compiled code before the clock runs, so the first
     motion is not held up by the compiler."""
     drone = EmulatedDrone((0.0, 0.0, 0.0))
+    drone.telemetry()  # the state packets' attitude
     drone.takeoff()
     drone.advance(0.01)
     drone.cut_motors()

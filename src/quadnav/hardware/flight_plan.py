@@ -45,11 +45,13 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.hardware.arc import Arc
+from quadnav.hardware.curves import CURVE_SPEED, Curve, fit_commands
 from quadnav.hardware.frames import GROUND_Z, IntArray, TakeoffFrame, to_cm
 from quadnav.hardware.geofence import Geofence, Region
 from quadnav.hardware.leg_room import LegRoom
 from quadnav.hardware.lost_link import LostLinkBound, creeping_pace
-from quadnav.hardware.moves import Move, MoveError, go_moves
+from quadnav.hardware.moves import Move, MoveError, go_moves, go_speed
 from quadnav.planning import (
     PlannerSettings,
     PlanningProblem,
@@ -59,7 +61,7 @@ from quadnav.planning import (
     plan,
 )
 from quadnav.planning.refine import refine
-from quadnav.planning.result import PlanStats, distinct
+from quadnav.planning.result import PlanStats, distinct, path_length
 from quadnav.trajectory.generate import (
     TrajectorySettings,
     join_legs,
@@ -82,6 +84,8 @@ TAKEOFF_HEIGHT = 0.8
 TRACKING_ALLOWANCE = 0.1
 #: Largest distance between trajectory points checked against the fence, metres.
 CHECK_SPACING = 0.01
+#: Largest distance between the trajectory samples ``curves`` mode follows, metres.
+CURVE_SAMPLE_SPACING = 0.02
 #: The eight ways to round a point (3,) down or up on each axis.
 _ROUNDINGS = np.array(list(itertools.product((0.0, 1.0), repeat=3)))
 
@@ -231,11 +235,68 @@ class FlightPlan:
                             f"heading, {np.degrees(self.frame.yaw):.3g} degrees, cannot "
                             "follow the route where it must stay: try a heading along the "
                             "map's axes)") from None
-        end = self.frame.cm_to_map(points[-1])
-        if not self.goal_room.column_ok([*end[:2], GROUND_Z], end):
-            raise MoveError(f"the landing under the last go move's end {points[-1].tolist()} "
-                            f"cm leaves {self.goal_room.name}")
+        self._check_landing(points[-1])
         return moves
+
+    def curve_moves(self, height: float, speed: float) -> list[Move | Curve]:
+        """``curves`` mode: :meth:`go_moves` through the start's zone and the goal's, and
+        between them ``curve`` and ``go`` commands that follow the trajectory within
+        :data:`~quadnav.hardware.curves.TOLERANCE_CM` (:func:`~quadnav.hardware.curves.
+        fit_commands`), every centimetre of each checked against the fence; ``speed``
+        m/s, a curve's clamped to the SDK's 0.6 m/s at most.
+
+        Raises:
+            MoveError: a part that no allowed command flies.
+        """
+        pruned, _ = self._pruned_cm
+        head, tail = self.pruned.head, self.pruned.tail
+        go = go_speed(speed)
+        start = go_moves(np.vstack([to_cm([0.0, 0.0, height]), pruned[:head + 1]]), go,
+                         self._allowed, self._rule)
+
+        def shifted(segments: range) -> range:
+            return range(segments.start + tail + 1, segments.stop + tail + 1)
+
+        end = go_moves(pruned[tail:], go, lambda a, b, k: self._allowed(a, b, shifted(k)),
+                       lambda k: self._rule(shifted(k)))
+        samples = 100.0 * self.frame.to_body(self.trajectory.position(self._fence_times()))
+        samples[0], samples[-1] = pruned[head], pruned[tail]
+        middle = fit_commands(samples, go, int(np.clip(go, *CURVE_SPEED)),
+                              self._arc_in_fence, self._line_in_fence)
+        self._check_landing(pruned[-1])
+        return [*start, *middle, *end]
+
+    def _fence_times(self) -> FloatArray:
+        """Trajectory times, s, every :data:`CURVE_SAMPLE_SPACING` m or closer, from where
+        it reaches the route's first vertex in the fence (the end of the start's zone) to
+        where it reaches the last (the start of the goal's)."""
+        trajectory, route = self.trajectory, self.route
+        at = [np.flatnonzero(np.all(np.isclose(trajectory.waypoints, point, atol=1e-9),
+                                    axis=1)) for point in route.points[[route.head, route.tail]]]
+        begin, end = trajectory.breaks[at[0][0]], trajectory.breaks[at[1][-1]]
+        coarse = np.linspace(begin, end, 1000)
+        length = path_length(trajectory.position(coarse))
+        return np.linspace(begin, end, max(2, int(np.ceil(length / CURVE_SAMPLE_SPACING)) + 1))
+
+    def _arc_in_fence(self, start: IntArray, via: IntArray, end: IntArray) -> bool:
+        """Whether every centimetre of the arc through three takeoff-frame points (cm)
+        is inside the fence."""
+        arc = Arc(start, via, end)
+        s = np.linspace(0.0, arc.length, max(2, int(np.ceil(arc.length)) + 1))
+        return bool(self.fence.contains(self.frame.cm_to_map(arc.at(s)[0])).all())
+
+    def _line_in_fence(self, start: IntArray, end: IntArray) -> bool:
+        """Whether the straight move between two takeoff-frame points (cm) is inside the
+        fence."""
+        return self.fence.segment_ok(self.frame.cm_to_map(start), self.frame.cm_to_map(end))
+
+    def _check_landing(self, end_cm: IntArray) -> None:
+        """MoveError unless the landing column under ``end_cm`` (takeoff frame) stays in
+        the goal's room."""
+        end = self.frame.cm_to_map(end_cm)
+        if not self.goal_room.column_ok([*end[:2], GROUND_Z], end):
+            raise MoveError(f"the landing under the last move's end {end_cm.tolist()} cm "
+                            f"leaves {self.goal_room.name}")
 
     def _segment_region(self, segment: int) -> Region:
         """Where ``go`` segment ``segment`` may go (segment 0 climbs from the takeoff
@@ -316,7 +377,7 @@ class FlightPlan:
 
     def planned_points(self, mode: str) -> FloatArray:
         """(N, 3) what is to be flown, takeoff to landing: through the pruned route
-        (``waypoints`` mode) or along the trajectory (``rc``)."""
+        (``waypoints`` mode) or along the trajectory (``curves``, ``rc``)."""
         middle = self.pruned.points if mode == "waypoints" else self.planned_track()
         return np.vstack([self.takeoff_ground, self.takeoff_point, middle,
                           self.landing_ground])
