@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from quadnav.arrays import FloatArray, read_only
+from quadnav.arrays import FloatArray, frozen, read_only
 from quadnav.limits import PLAN_ITERATIONS
 
 IntArray = NDArray[np.int64]
@@ -112,16 +112,17 @@ class PlanResult:
     message: str = ""
 
     def __post_init__(self) -> None:
-        path = np.array(self.path, dtype=np.float64).reshape(-1, 3)
-        nodes = np.array(self.tree_nodes, dtype=np.float64).reshape(-1, 3)
-        parents = np.array(self.tree_parents, dtype=np.int64).reshape(-1)
+        # A result made from another (``replace``) shares its frozen tree, not a copy.
+        path = frozen(self.path, np.float64).reshape(-1, 3)
+        nodes = frozen(self.tree_nodes, np.float64).reshape(-1, 3)
+        parents = frozen(self.tree_parents, np.int64).reshape(-1)
         if len(parents) != len(nodes):
             raise ValueError(f"tree_parents has {len(parents)} entries for {len(nodes)} nodes")
         if self.solved != (len(path) >= 2):
             raise ValueError("a solved result needs a path of at least 2 points, else none")
-        object.__setattr__(self, "path", read_only(path))
-        object.__setattr__(self, "tree_nodes", read_only(nodes))
-        object.__setattr__(self, "tree_parents", read_only(parents))
+        object.__setattr__(self, "path", path)
+        object.__setattr__(self, "tree_nodes", nodes)
+        object.__setattr__(self, "tree_parents", parents)
 
     @property
     def length(self) -> float:
