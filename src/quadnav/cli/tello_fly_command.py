@@ -130,11 +130,7 @@ def tello_fly(args: argparse.Namespace) -> int:
     folder = check_output_folder(args.output)
     world = load_world(args.map)
     saved = _saved_plan(args)
-    if saved is not None:
-        start = goal = None
-    else:
-        start, goal = resolve_start_goal(args, world)
-        saved = None
+    start, goal = (None, None) if saved is not None else resolve_start_goal(args, world)
     try:
         with planning_bar(f"plan ({args.planner})", args.quiet or saved is not None) as progress:
             plan = plan_flight(
