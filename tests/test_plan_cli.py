@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 
 import numpy as np
 from clitools import assert_user_error, run_here
@@ -36,11 +38,28 @@ def test_plan_writes_path_stats_and_figure(tmp_path):
     assert "search:" in result.stdout and "shortcut:" in result.stdout
 
 
-def test_same_seed_same_path_file(tmp_path):
+def test_same_seed_same_path_file_with_or_without_the_figure(tmp_path):
     args = ("plan", "window", "--iterations", "3000", "--time", "60", "--no-refine", "--quiet")
     assert run_here(*args, "-o", tmp_path / "a").returncode == 0
-    assert run_here(*args, "-o", tmp_path / "b").returncode == 0
+    result = run_here(*args, "--no-figures", "-o", tmp_path / "b")
+    assert result.returncode == 0
     assert (tmp_path / "a" / "path.csv").read_text() == (tmp_path / "b" / "path.csv").read_text()
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == ["path.csv", "plan.json"]
+    assert result.stdout.splitlines()[-1] == f"wrote {tmp_path / 'b' / 'path.csv'}, " \
+                                             f"{tmp_path / 'b' / 'plan.json'}"
+    assert run_here(*args, "--no-figures", "-o", tmp_path / "a").returncode == 0
+    assert not (tmp_path / "a" / "plan.png").exists()  # the earlier run's figure is gone
+
+
+def test_plan_without_figures_never_loads_matplotlib(tmp_path):
+    code = ("import sys; from quadnav.cli.main import main; "
+            "main(['plan', '--first', '--no-figures', '--quiet', '-o', 'out']); "
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'matplotlib'))")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "[]"
+    assert (tmp_path / "out" / "path.csv").exists()
 
 
 def test_no_path_in_budget_exits_1_and_keeps_no_stale_path(tmp_path):

@@ -42,10 +42,7 @@ def settings_from(args: argparse.Namespace) -> PlannerSettings:
 
 
 def plan(args: argparse.Namespace) -> int:
-    """Plan, refine and write the three output files; exit 1 if no path was found."""
-    from quadnav.viz.figures import save_figure
-    from quadnav.viz.plan_figure import plan_figure
-
+    """Plan, refine and write the output files; exit 1 if no path was found."""
     get_planner(args.planner)
     folder = check_output_folder(args.output)
     settings = settings_from(args)
@@ -62,15 +59,23 @@ def plan(args: argparse.Namespace) -> int:
             (staging / "path.csv").write_text(path_csv(result.path))
         (staging / "plan.json").write_text(
             json.dumps(plan_summary(problem, result, settings, raw_length), indent=2) + "\n")
-        save_figure(plan_figure(problem, result), staging / "plan.png")
+        if not args.no_figures:
+            _save_plan_figure(problem, result, staging / "plan.png")
     _print_summary(problem.world.name, result, raw_length)
-    written = ["path.csv"] if result.solved else []
-    print("wrote " + ", ".join(str(folder / name) for name in [*written, "plan.json",
-                                                               "plan.png"]))
+    written = [name for name in PLAN_FILES if (folder / name).exists()]
+    print("wrote " + ", ".join(str(folder / name) for name in written))
     if not result.solved:
         print(f"quadnav: no path: {result.message}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def _save_plan_figure(problem, result, path) -> None:
+    """Draw the tree and path into ``path`` (matplotlib loads only here)."""
+    from quadnav.viz.figures import save_figure
+    from quadnav.viz.plan_figure import plan_figure
+
+    save_figure(plan_figure(problem, result), path)
 
 
 def _print_summary(name: str, result, raw_length: float) -> None:
@@ -91,7 +96,8 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
         "plan", help=command_help("plan"),
         description="Plan a collision-free path through MAP with RRT* (or an OMPL planner), "
                     "shortcut and smooth it, and write DIR/path.csv (x,y,z per vertex), "
-                    "DIR/plan.json (statistics) and DIR/plan.png (tree and path). Exit 1 "
+                    "DIR/plan.json (statistics) and DIR/plan.png (tree and path; not with "
+                    "--no-figures). Exit 1 "
                     "when no path is found within the budget (plan.json and plan.png are "
                     "still written), 2 on bad input.")
     add_map_argument(p, optional=True)
@@ -110,6 +116,8 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
                         "(default: the step)")
     p.add_argument("--no-refine", action="store_true",
                    help="skip shortcut pruning and smoothing")
+    p.add_argument("--no-figures", action="store_true",
+                   help="skip plan.png (matplotlib is not even loaded: the fastest plan)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("-o", "--output", default="plan", metavar="DIR",
                    help="folder to write into, created if needed (default: plan)")

@@ -1,0 +1,76 @@
+"""Compile the kernels of the main commands into numba's cache beside the package.
+
+The build runs this (``setup.py``), so that the first ``quadnav fly`` after ``pip install``
+loads the planner, the controllers and the simulation from the cache instead of spending
+about 45 s of CPU compiling them. numba keys its cache on the content of each source file
+(numba 0.68 and later), the Python version, numba's version and the CPU, so the kernels
+compiled into the wheel while ``pip install`` builds it on this machine are the ones the
+installed package loads. Where a key differs (an older numba, a wheel built on another
+machine, ``NUMBA_CACHE_DIR`` set), nothing breaks: the first run compiles as before.
+
+``python -m quadnav.cli.precompile`` runs, quietly in a scratch folder, ``quadnav plan``
+on the default world beside ``quadnav track hover`` with each controller (each has a step
+of its own and a compiled loop of its own for its type of gains), in two processes so that
+two cores compile at once; then ``quadnav fly --no-figures``, which loads
+what they compiled and compiles the rest. It exits 1, with the failing command's last
+lines on stderr, if a command fails.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+from quadnav.control.registry import CONTROLLERS
+
+#: The planner's kernels (the default world, the default budget, then refined).
+PLAN = ["plan", "--no-figures", "--quiet", "-o", "plan"]
+
+
+def track(controller: str) -> list[str]:
+    """The arguments of a hover flown with ``controller``: the simulation's kernels."""
+    return ["track", "hover", "--controller", controller, "--no-figures", "--quiet",
+            "-o", f"track-{controller}"]
+
+
+#: The whole main job, last: it compiles what neither of the others did.
+FLY = ["fly", "--no-figures", "--quiet", "-o", "fly"]
+
+
+def start(arguments: Sequence[str], folder: Path) -> subprocess.Popen[bytes]:
+    """Start ``quadnav ARGUMENTS`` in ``folder`` with this interpreter."""
+    return subprocess.Popen([sys.executable, "-m", "quadnav", *arguments], cwd=folder,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+def finish(process: subprocess.Popen[bytes]) -> bool:
+    """Wait for ``process``; on failure print its command and last lines; True if it ran."""
+    _, errors = process.communicate()
+    if process.returncode == 0:
+        return True
+    tail = errors.decode(errors="replace").strip().splitlines()[-5:]
+    print(f"quadnav precompile: {' '.join(map(str, process.args))} exited "
+          f"{process.returncode}", *tail, sep="\n  ", file=sys.stderr)
+    return False
+
+
+def run_in_sequence(commands: Sequence[Sequence[str]], folder: Path) -> bool:
+    """Run ``commands`` one after another in one process each; True if all ran."""
+    return all([finish(start(command, folder)) for command in commands])
+
+
+def main() -> int:
+    """Compile the kernels; exit code 0, or 1 if a command failed."""
+    with tempfile.TemporaryDirectory(prefix="quadnav-precompile-") as scratch:
+        folder = Path(scratch)
+        planning = start(PLAN, folder)
+        flying = run_in_sequence([track(name) for name in CONTROLLERS], folder)
+        planned = finish(planning)
+        return 0 if planned and flying and finish(start(FLY, folder)) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
