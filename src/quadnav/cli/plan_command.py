@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from quadnav.cli.args import (
     add_map_argument,
@@ -20,7 +21,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.progress import planning_bar
 from quadnav.limits import LENGTH
-from quadnav.planning import PlannerSettings, get_planner, make_problem
+from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, get_planner, make_problem
 from quadnav.planning import plan as run_planner
 from quadnav.planning.refine import refine
 from quadnav.planning.report import path_csv, plan_summary
@@ -70,8 +71,8 @@ def plan(args: argparse.Namespace) -> int:
     return 0
 
 
-def _save_plan_figure(problem, result, path) -> None:
-    """Draw the tree and path into ``path`` (matplotlib loads only here)."""
+def _save_plan_figure(problem: PlanningProblem, result: PlanResult, path: Path) -> None:
+    """Draw the tree and path into the image file ``path`` (matplotlib loads only here)."""
     from quadnav.viz.figures import save_figure
     from quadnav.viz.plan_figure import plan_figure
 

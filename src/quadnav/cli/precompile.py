@@ -58,7 +58,8 @@ def finish(process: subprocess.Popen[bytes]) -> bool:
 
 
 def run_in_sequence(commands: Sequence[Sequence[str]], folder: Path) -> bool:
-    """Run ``commands`` one after another in one process each; True if all ran."""
+    """Run ``commands`` one after another in one process each; True if all ran (a failed
+    one does not stop the others: what they compile is kept all the same)."""
     return all([finish(start(command, folder)) for command in commands])
 
 

@@ -28,8 +28,6 @@ import itertools
 
 import clarabel
 import numpy as np
-from scipy.sparse import coo_matrix, csc_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
@@ -201,6 +199,9 @@ def _shortest_way_out(legs: World, free_world: World, point: FloatArray,
     nodes = np.vstack([centres, point])
     row, col = np.concatenate(rows), np.concatenate(cols)
     weight = np.linalg.norm(nodes[row] - nodes[col], axis=1)
+    from scipy.sparse import coo_matrix  # only here: most plans need no way around
+    from scipy.sparse.csgraph import dijkstra
+
     graph = coo_matrix((weight, (row, col)), shape=(len(nodes), len(nodes))).tocsr()
     distance, predecessor = dijkstra(graph, directed=False, indices=source,
                                      return_predecessors=True)
@@ -259,6 +260,8 @@ def _taut_leg(point: FloatArray, cells: FloatArray, depth: float) -> FloatArray:
     q = np.concatenate([np.zeros(3 * m), np.ones(m)])
     settings = clarabel.DefaultSettings()
     settings.verbose = False
+    from scipy.sparse import csc_matrix  # only here: most plans need no leg around
+
     solver = clarabel.DefaultSolver(csc_matrix((n, n)), q, csc_matrix(np.vstack(rows)),
                                     np.concatenate(b), cones, settings)
     solution = solver.solve()
