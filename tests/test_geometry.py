@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -210,6 +212,19 @@ def test_world_values_are_immutable():
         world.blocks[0, 0] = 1
     with pytest.raises(AttributeError):
         world.name = "x"
+
+
+def test_an_unpickled_world_stays_immutable_and_answers_the_same():
+    # A batch worker gets its missions' worlds pickled; numpy unpickles arrays writable,
+    # and a compiled query would then be compiled again for writable arrays.
+    world = World(boundary=BOUNDARY, blocks=[[4, 4, 4, 6, 6, 6]], start=[1, 1, 1], name="w")
+    points = np.array([[1.0, 1.0, 1.0], [5.0, 5.0, 7.0]])
+    world.clearances(points)  # fills the cached per-coordinate blocks, pickled with it
+    copy = pickle.loads(pickle.dumps(world))
+    for name in ("boundary", "blocks", "colors", "start"):
+        assert not getattr(copy, name).flags.writeable, name
+    assert np.array_equal(copy.clearances(points), world.clearances(points))
+    assert copy.name == "w" and copy.goal is None
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [

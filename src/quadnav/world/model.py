@@ -137,6 +137,17 @@ class World:
         if self.margin is not None:
             set_(self, "margin", float(MARGIN.check(self.margin, "margin")))
 
+    def __setstate__(self, state: dict[str, object]) -> None:
+        """Restore an unpickled world (a batch worker's copy of a mission): numpy unpickles
+        arrays writable, so the fields are made read-only again, as the constructor makes
+        them. (Compiled queries are specialised on read-only arrays apart: a writable copy
+        would compile them a second time.)"""
+        names = {spec.name for spec in dataclasses.fields(self)}
+        for name, value in state.items():
+            if name in names and isinstance(value, np.ndarray):
+                value = read_only(value)
+            object.__setattr__(self, name, value)
+
     # ----------------------------------------------------------------- basics
     @property
     def lower(self) -> FloatArray:
