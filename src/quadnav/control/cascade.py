@@ -148,7 +148,9 @@ def _attitude_setpoint(thrust: np.ndarray, yaw: float) -> np.ndarray:
     perpendicular to it and to the heading ``(cos yaw, sin yaw, 0)``, x = y cross z."""
     r = np.empty((3, 3))
     z = r[:, 2]
-    z[:] = thrust / math.sqrt(thrust[0] ** 2 + thrust[1] ** 2 + thrust[2] ** 2)
+    length = math.sqrt(thrust[0] ** 2 + thrust[1] ** 2 + thrust[2] ** 2)
+    for a in range(3):  # element by element: array copies compile error messages
+        z[a] = thrust[a] / length
     c, s = math.cos(yaw), math.sin(yaw)
     y = r[:, 1]  # z cross heading
     y[0], y[1], y[2] = -z[2] * s, z[2] * c, z[0] * s - z[1] * c
@@ -185,7 +187,8 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
         position_error[a] = e
         v_sp[a] = (reference[3 + a] + g.position[0, a] * e + memory[_POSITION_INTEGRAL + a]
                    + g.position[2, a] * rate)
-    raw_v[:] = v_sp
+    for a in range(3):  # element by element: array copies compile error messages
+        raw_v[a] = v_sp[a]
     _scale_xy(v_sp, g.speed_limits[0])
     v_sp[2] = min(max(v_sp[2], -g.speed_limits[2]), g.speed_limits[1])
     for a in range(3):
@@ -210,7 +213,8 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
         force[a] = (v.mass * a_sp[a] + r[a, 0] * drag[0] + r[a, 1] * drag[1]
                     + r[a, 2] * drag[2])
     force[2] += v.mass * v.gravity
-    unlimited[:] = force
+    for a in range(3):
+        unlimited[a] = force[a]
     _thrust_vector(force, v, g)
     for a in range(3):  # back-calculation: integrate only the error the output can follow
         taken = (unlimited[a] - force[a]) / v.mass

@@ -78,8 +78,10 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
     heading = np.array([math.cos(reference[9]), math.sin(reference[9]), 0.0])
     b2 = np.cross(b3, heading)
     b2 /= math.sqrt(b2[0] ** 2 + b2[1] ** 2 + b2[2] ** 2)
+    b1 = np.cross(b2, b3)
     rd = np.empty((3, 3))
-    rd[:, 0], rd[:, 1], rd[:, 2] = np.cross(b2, b3), b2, b3
+    for a in range(3):  # element by element: array copies compile error messages
+        rd[a, 0], rd[a, 1], rd[a, 2] = b1[a], b2[a], b3[a]
     error = 0.5 * (rd.T @ r - r.T @ rd)
     e_r = np.array([error[2, 1], error[0, 2], error[1, 0]])
     w_d = r.T @ np.array([0.0, 0.0, reference[10]])  # the yaw rate, in body axes

@@ -65,7 +65,8 @@ def _point_at(points, arc, s, snap, point):
         if abs(arc[k] - s) < abs(arc[nearest] - s):
             nearest = k
     if abs(arc[nearest] - s) <= snap:
-        point[:] = points[nearest]
+        for axis in range(3):  # element by element: an array copy compiles error messages
+            point[axis] = points[nearest, axis]
         return max(nearest - 1, 0), arc[nearest]
     i = 0
     while i < len(points) - 2 and arc[i + 1] <= s:
@@ -95,7 +96,8 @@ def _spliced(points, i0, p0, p1, i1):
             break
         if count == 0 or (vertex[0] != out[count - 1, 0] or vertex[1] != out[count - 1, 1]
                           or vertex[2] != out[count - 1, 2]):
-            out[count] = vertex
+            for axis in range(3):
+                out[count, axis] = vertex[axis]
             count += 1
     return out[:count].copy()
 
@@ -125,9 +127,10 @@ def random_shortcuts(points, grid, uniforms, range_ratio, snap_fraction, epsilon
         # The shortcut, and the pieces of segments i0 and i1 kept: those are free in exact
         # arithmetic, but p0 and p1 are rounded, and near a tangency a piece can touch a
         # block. One call site for the three checks keeps the compiled loop small.
-        checks[0, 0], checks[0, 1] = p0, p1
-        checks[1, 0], checks[1, 1] = points[i0], p0
-        checks[2, 0], checks[2, 1] = p1, points[i1 + 1]
+        for axis in range(3):  # element by element: array copies compile error messages
+            checks[0, 0, axis], checks[0, 1, axis] = p0[axis], p1[axis]
+            checks[1, 0, axis], checks[1, 1, axis] = points[i0, axis], p0[axis]
+            checks[2, 0, axis], checks[2, 1, axis] = p1[axis], points[i1 + 1, axis]
         free = True
         for k in range(3):
             if not grid_segment_free(checks[k, 0], checks[k, 1], grid):
@@ -153,12 +156,17 @@ def smoothing_sweeps(original, grid, weight_data, weight_smooth, tolerance, max_
     frozen[0] = frozen[-1] = True
     before = np.empty_like(path)
     for _ in range(max_sweeps):
-        before[:] = path
+        for i in range(count):  # element by element: array copies compile error messages
+            for axis in range(3):
+                before[i, axis] = path[i, axis]
         for parity in (1, 0):  # a point's neighbours have the other parity
             for i in range(1, count - 1):
                 if i % 2 == parity and not frozen[i]:
-                    path[i] += (weight_data * (original[i] - path[i])
-                                + weight_smooth * (path[i - 1] + path[i + 1] - 2 * path[i]))
+                    for axis in range(3):
+                        path[i, axis] += (
+                            weight_data * (original[i, axis] - path[i, axis])
+                            + weight_smooth * (path[i - 1, axis] + path[i + 1, axis]
+                                               - 2 * path[i, axis]))
         _revert_collisions(path, before, frozen, grid)
         moved = 0.0
         for i in range(count):
@@ -187,7 +195,8 @@ def _revert_collisions(path, before, frozen, grid):
             return
         for k in np.flatnonzero(hit):
             for end in (k, k + 1):
-                path[end] = before[end]
+                for axis in range(3):
+                    path[end, axis] = before[end, axis]
                 moved[end] = False
                 frozen[end] = True
         # Only segments beside a point just put back can newly collide.

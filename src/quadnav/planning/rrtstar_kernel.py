@@ -239,7 +239,8 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
         counts[ITERATIONS] += 1
         n = counts[NODES]
         if rng.random() < goal_bias:
-            sample[:] = goal
+            for a in range(3):  # element by element: an array copy compiles error messages
+                sample[a] = goal[a]
         elif informed > 0 and best[BEST_VERTEX] >= 0:
             _informed_sample(rng, best[BEST_COST], start, goal, rotation, origin, extent,
                              sample)
@@ -277,7 +278,8 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
                 break
             checked[k] = 2
         v = n
-        nodes[v] = new
+        for a in range(3):
+            nodes[v, a] = new[a]
         cost[v] = best_cost
         first_child[v] = -1
         _link_child(v, best_parent, parent, first_child, next_sibling)

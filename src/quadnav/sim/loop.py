@@ -94,9 +94,13 @@ def _measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """The state as the sensors see it: noise (12,) on position, velocity, attitude
     (a small rotation) and body rates."""
     out = state.copy()
-    out[0:6] += noise[0:6]
-    out[6:10] = quaternion.multiply(state[6:10], quaternion.from_rotation_vector(noise[6:9]))
-    out[10:13] += noise[9:12]
+    attitude = quaternion.multiply(state[6:10], quaternion.from_rotation_vector(noise[6:9]))
+    for i in range(6):  # element by element: array copies compile error messages
+        out[i] += noise[i]
+    for i in range(4):
+        out[6 + i] = attitude[i]
+    for i in range(3):
+        out[10 + i] += noise[9 + i]
     return out
 
 
@@ -162,8 +166,11 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         stats[STEPS] += 1.0
         stats[SATURATED] += memory[STEP_SATURATED]
         if k % record.every == 0:
-            record.states[k // record.every] = state
-            record.commands[k // record.every] = commands
+            row = k // record.every
+            for i in range(len(state)):
+                record.states[row, i] = state[i]
+            for i in range(len(commands)):
+                record.commands[row, i] = commands[i]
         for _ in range(substeps):
             rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z, work)
             code = _stop_code(state, v, where, stats)
