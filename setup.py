@@ -3,7 +3,7 @@ sources are copied into the build folder, compile quadnav's numba kernels there
 (:mod:`quadnav.cli.precompile`), so the wheel carries them in its ``__pycache__`` folders
 and the first ``quadnav fly`` after ``pip install`` loads them instead of compiling.
 
-Set ``QUADNAV_PRECOMPILE=0`` to skip it (the first run then compiles, about 45 s of CPU).
+Set ``QUADNAV_PRECOMPILE=0`` to skip it (the first run then compiles, about 30 s of CPU).
 Editable installs skip it: numba caches beside the sources on the first run. A failed
 compile is reported and does not fail the build.
 """
@@ -32,7 +32,7 @@ class BuildPyWithKernels(build_py):
         environment = {name: value for name, value in os.environ.items()
                        if name != "NUMBA_CACHE_DIR"}  # numba caches beside the sources
         environment |= {"PYTHONPATH": path, "PYTHONDONTWRITEBYTECODE": "1"}
-        print("compiling quadnav's kernels into the build (about 45 s of CPU)", flush=True)
+        print("compiling quadnav's kernels into the build (about 40 s of CPU)", flush=True)
         done = subprocess.run([sys.executable, "-m", "quadnav.cli.precompile"],
                               env=environment, check=False)
         if done.returncode != 0:

@@ -2,7 +2,7 @@
 
 The build runs this (``setup.py``), so that the first ``quadnav fly`` after ``pip install``
 loads the planner, the controllers and the simulation from the cache instead of spending
-about 45 s of CPU compiling them. numba keys its cache on the content of each source file
+about 30 s of CPU compiling them. numba keys its cache on the content of each source file
 (numba 0.68 and later), the Python version, numba's version and the CPU, so the kernels
 compiled into the wheel while ``pip install`` builds it on this machine are the ones the
 installed package loads. Where a key differs (an older numba, a wheel built on another
