@@ -51,3 +51,15 @@ def test_the_main_job_loads_its_kernels_and_compiles_none(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "[cache] data loaded" in done.stdout
     assert "[cache] data saved" not in done.stdout
+
+
+def test_a_failed_compile_command_is_reported_with_its_last_lines(tmp_path, capsys):
+    from quadnav.cli.precompile import finish, start
+
+    failed = start(["plan", "no-such-map.txt", "--quiet", "-o", "plan"], tmp_path)
+    assert finish(failed) is False
+    header, *tail = capsys.readouterr().err.splitlines()
+    assert header.startswith("quadnav precompile: ") and header.endswith(" exited 2")
+    assert "-m quadnav plan no-such-map.txt" in header
+    assert any("no-such-map.txt" in line for line in tail)
+    assert not (tmp_path / "plan").exists()
