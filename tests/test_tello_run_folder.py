@@ -14,7 +14,8 @@ from tellotools import emulated_flight, needs_netns, planned_room
 
 from quadnav.cli.main import main
 from quadnav.hardware.bridge import BridgeSettings
-from quadnav.hardware.run_record import nearest_on_polyline, planned_route, tello_run_content
+from quadnav.hardware.run_record import planned_route, tello_run_content
+from quadnav.planning.result import nearest_on_polyline
 from quadnav.report.run_writer import write_run
 from quadnav.runs import read_run
 

@@ -21,6 +21,7 @@ from quadnav.hardware.arc import Arc
 from quadnav.hardware.frames import IntArray
 from quadnav.hardware.moves import GO_MAX_CM, Move, MoveError, is_long_enough
 from quadnav.hardware.sdk import CURVE_RADIUS_CM, circumradius
+from quadnav.planning.result import nearest_on_polyline
 
 #: Farthest a command's path may come from the trajectory's samples it stands for, cm.
 TOLERANCE_CM = 5.0
@@ -76,9 +77,8 @@ def _line_ok(step: IntArray) -> bool:
 
 def _off_line(points: np.ndarray, start: IntArray, end: IntArray) -> float:
     """Largest distance, cm, of ``points`` (K, 3) from the segment start -> end."""
-    a, d = start.astype(np.float64), (end - start).astype(np.float64)
-    along = np.clip((points - a) @ d / max(float(d @ d), 1e-12), 0.0, 1.0)
-    return float(np.linalg.norm(points - (a + along[:, None] * d), axis=1).max())
+    foot = nearest_on_polyline(points, np.stack([start, end]))
+    return float(np.linalg.norm(points - foot, axis=1).max())
 
 
 def fit_commands(samples: np.ndarray, go_speed: int, curve_speed: int,

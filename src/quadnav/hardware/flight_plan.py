@@ -378,7 +378,12 @@ class FlightPlan:
     def planned_points(self, mode: str) -> FloatArray:
         """(N, 3) what is to be flown, takeoff to landing: through the pruned route
         (``waypoints`` mode) or along the trajectory (``curves``, ``rc``)."""
-        middle = self.pruned.points if mode == "waypoints" else self.planned_track()
+        return self.between_columns(self.pruned.points if mode == "waypoints"
+                                    else self.planned_track())
+
+    def between_columns(self, middle: FloatArray) -> FloatArray:
+        """(N, 3) ``middle`` (K, 3) m with the takeoff column before it (the floor under
+        the start, the takeoff point) and the floor under the landing after it."""
         return np.vstack([self.takeoff_ground, self.takeoff_point, middle,
                           self.landing_ground])
 

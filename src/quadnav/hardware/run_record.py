@@ -36,7 +36,7 @@ from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.hardware.bridge import BridgeSettings, Outcome, Status
 from quadnav.hardware.flight_plan import FlightPlan
-from quadnav.planning.result import path_length
+from quadnav.planning.result import nearest_on_polyline, path_length
 from quadnav.runs import FlightTable, RunContent
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.params import load_params
@@ -46,26 +46,12 @@ SOURCE = "tello"
 #: How far the floor is lowered for the clearance of a flown track, m: more than any
 #: dead-reckoned height below it, so the floor it stands on is never the nearest face.
 FLOOR_DROP = 10.0
+
+
 def planned_route(plan: FlightPlan) -> FloatArray:
     """(N, 3) what the drone was planned to fly, m: up from the floor under the start to
     the takeoff point, the route, down to the floor under its end."""
-    return np.vstack([plan.takeoff_ground, plan.takeoff_point, plan.route.points,
-                      plan.landing_ground])
-
-
-def nearest_on_polyline(points: ArrayLike, polyline: ArrayLike) -> FloatArray:
-    """The nearest point (N, 3) of the polyline (M >= 1, 3) to each of ``points`` (N, 3)."""
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 1, 3)
-    line = np.asarray(polyline, dtype=np.float64).reshape(-1, 3)
-    if len(line) == 1:
-        return np.repeat(line, p.shape[0], axis=0)
-    a, b = line[:-1], line[1:]
-    ab = b - a
-    along = np.einsum("nkd,kd->nk", p - a, ab) / np.maximum(np.einsum("kd,kd->k", ab, ab),
-                                                             1e-300)
-    foot = a + np.clip(along, 0.0, 1.0)[..., None] * ab  # (N, K, 3)
-    best = np.argmin(np.sum((foot - p) ** 2, axis=2), axis=1)
-    return foot[np.arange(len(best)), best]
+    return plan.between_columns(plan.route.points)
 
 
 def flown_table(plan: FlightPlan, track: ArrayLike) -> FlightTable:

@@ -33,6 +33,21 @@ def distinct(points: ArrayLike) -> FloatArray:
     return pts[np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])]
 
 
+def nearest_on_polyline(points: ArrayLike, polyline: ArrayLike) -> FloatArray:
+    """The nearest point (N, 3) of the polyline (M >= 1, 3) to each of ``points`` (N, 3)."""
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 1, 3)
+    line = np.asarray(polyline, dtype=np.float64).reshape(-1, 3)
+    if len(line) == 1:
+        return np.repeat(line, p.shape[0], axis=0)
+    a, b = line[:-1], line[1:]
+    ab = b - a
+    along = np.einsum("nkd,kd->nk", p - a, ab) / np.maximum(np.einsum("kd,kd->k", ab, ab),
+                                                             1e-300)
+    foot = a + np.clip(along, 0.0, 1.0)[..., None] * ab  # (N, K, 3)
+    best = np.argmin(np.sum((foot - p) ** 2, axis=2), axis=1)
+    return foot[np.arange(len(best)), best]
+
+
 @dataclass(frozen=True)
 class PostStep:
     """One post-processing step applied to a path.
