@@ -24,12 +24,13 @@ INCLUDES = (Path("/usr/include/ompl-1.5"), Path("/usr/include/eigen3"))
 
 
 @dataclass(frozen=True)
-class CompiledRun:
-    """One run of the driver: set-up and time to the first solution, s, and the full
-    path's length, m (``inf`` when no solution was found in time)."""
+class FirstRun:
+    """A run stopped at its first solution (of any planner of the bench): the time to it
+    and the set-up outside the clock, s (``nan``: not measured), and the full path's
+    length, m (``inf``: none found in time)."""
 
-    setup: float
     first: float
+    setup: float
     length: float
 
 
@@ -70,7 +71,7 @@ def write_problem(problem: PlanningProblem, settings: PlannerSettings, file: Pat
 
 
 def run_compiled(binary: Path, problem_file: Path, problem: PlanningProblem, seed: int,
-                 limit: float) -> CompiledRun:
+                 limit: float) -> FirstRun:
     """Run the driver once with OMPL's seed ``seed + 1`` (it must be nonzero) until its
     first solution or ``limit`` seconds."""
     done = subprocess.run([str(binary), str(problem_file), str(seed + 1), f"{limit:g}"],
@@ -78,4 +79,4 @@ def run_compiled(binary: Path, problem_file: Path, problem: PlanningProblem, see
     setup, first, search_length, _vertices = done.stdout.split()
     legs = path_length(problem.start_leg) + path_length(problem.goal_leg)
     length = float(search_length) + legs
-    return CompiledRun(float(setup), float(first), length)  # both "inf" when none found
+    return FirstRun(float(first), float(setup), length)  # both "inf" when none found

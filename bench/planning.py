@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from compiled_ompl import compiled_ompl, run_compiled, write_problem
+from compiled_ompl import FirstRun, compiled_ompl, run_compiled, write_problem
 from textbook_rrtstar import plan_textbook
 
 from quadnav.planning import (
@@ -112,16 +112,6 @@ class Figures:
         return self.values.get(f"{kind} {planner}", [])
 
 
-@dataclass(frozen=True)
-class FirstRun:
-    """A run stopped at its first solution: the time to it and the set-up outside the
-    clock, s (``nan``: not measured), and the path's length, m (``inf``: none found)."""
-
-    first: float
-    setup: float
-    length: float
-
-
 def _first_run(result: PlanResult, setup_measured: bool = True) -> FirstRun:
     """The figures of a :class:`PlanResult` stopped at its first solution."""
     found = result.stats.time_to_first
@@ -143,8 +133,8 @@ def first_solution_runners(budgets: Budgets, with_ompl: bool, compiled: Path | N
 
     runners = {OURS: ours}
     if compiled is not None:
-        runners[OMPL_CPP] = lambda p, s: FirstRun(
-            **vars(run_compiled(compiled, problem_file, p, s, budgets.first)))
+        runners[OMPL_CPP] = lambda p, s: run_compiled(compiled, problem_file, p, s,
+                                                      budgets.first)
     if with_ompl:
         runners[OMPL] = lambda p, s: _first_run(
             plan(p, settings(s, budgets.first), "ompl:RRTstar"))
