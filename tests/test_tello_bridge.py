@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 import pytest
-from clitools import assert_user_error, run
+from clitools import assert_user_error, run, run_here
 from hypothesis import given
 from hypothesis import strategies as st
 from tellotools import (
@@ -323,25 +323,25 @@ def test_a_saved_path_is_flown_as_given_through_the_same_checks(tmp_path):
 
     near_wall = tmp_path / "near.csv"  # 0.25 m from the ceiling: inside margin + allowance
     near_wall.write_text("x,y,z\n0.5,1,0.8\n2,1,1.25\n3.5,1,0.8\n")
-    assert_user_error(run("tello", "fly", room, "--path", near_wall, "--dry-run",
+    assert_user_error(run_here("tello", "fly", room, "--path", near_wall, "--dry-run",
                           "-o", tmp_path / "refused"),
                       f"{near_wall}: the segment (0.5, 1, 0.8) -> (2, 1, 1.25) comes closer "
                       "than 0.3 m", "the path keeps 0.25 m; fly it with --margin 0.15 or less")
     assert not (tmp_path / "refused").exists()
-    assert_user_error(run("tello", "fly", room, "--path", saved, "--goal", "3", "1", "1",
+    assert_user_error(run_here("tello", "fly", room, "--path", saved, "--goal", "3", "1", "1",
                           "--dry-run", "-o", tmp_path / "refused"),
                       "leave out --start, --goal and --start-goal")
     saved.write_text("x,y\n1,2\n")
-    assert_user_error(run("tello", "fly", room, "--path", saved, "--dry-run",
+    assert_user_error(run_here("tello", "fly", room, "--path", saved, "--dry-run",
                           "-o", tmp_path / "refused"), f"{saved}:1:", "x,y,z")
 
 
 def test_a_saved_trajectory_is_followed_as_timed_through_the_same_checks(tmp_path):
     room = tmp_path / "room.txt"
     room.write_text(ROOM)
-    assert run("plan", room, "--start", "0.5", "1", "0.8", "--goal", "3.5", "1", "0.8",
+    assert run_here("plan", room, "--start", "0.5", "1", "0.8", "--goal", "3.5", "1", "0.8",
                "--margin", "0.3", "--quiet", "-o", tmp_path / "p").returncode == 0
-    assert run("traj", room, "--path", tmp_path / "p" / "path.csv", "--speed", "0.5",
+    assert run_here("traj", room, "--path", tmp_path / "p" / "path.csv", "--speed", "0.5",
                "-o", tmp_path / "t").returncode == 0
     saved = tmp_path / "t" / "trajectory.csv"
     reference = read_reference_file(saved)
@@ -361,11 +361,11 @@ def test_a_saved_trajectory_is_followed_as_timed_through_the_same_checks(tmp_pat
     first = rows[1].split(",")
     first[3] = "0"
     floor.write_text("\n".join([rows[0], ",".join(first), *rows[2:]]) + "\n")
-    assert_user_error(run("tello", "fly", room, "--trajectory", floor, "--dry-run",
+    assert_user_error(run_here("tello", "fly", room, "--trajectory", floor, "--dry-run",
                           "-o", tmp_path / "refused"),
                       f"{floor}: the trajectory starts at (0.5, 1, 0), inside the 0.3 m margin",
                       "fly its path with --path")
-    assert_user_error(run("tello", "fly", room, "--trajectory", saved, "--path", saved,
+    assert_user_error(run_here("tello", "fly", room, "--trajectory", saved, "--path", saved,
                           "--dry-run", "-o", tmp_path / "refused"), "give one saved plan")
     assert not (tmp_path / "refused").exists()
 
@@ -425,7 +425,7 @@ def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, t
 
 
 def test_cli_bad_flags_are_one_line_errors(tmp_path):
-    assert_user_error(run("tello", "fly", "forest", "--dry-run", "--speed", "2", "-o", tmp_path),
+    assert_user_error(run_here("tello", "fly", "forest", "--dry-run", "--speed", "2", "-o", tmp_path),
                       "--speed", "expected from 0.01 to 1 m/s")
     for check, text, message in ((tello_speed, "0", "from 0.01 to 1 m/s"), (ipv4, "drone", "IPv4"),
                                  (ipv4, "192.168.10.256", "IPv4"), (percent, "120", "0..100"),
@@ -438,7 +438,7 @@ def test_cli_bad_flags_are_one_line_errors(tmp_path):
 def test_cli_refuses_a_plan_outside_the_fence(tmp_path):
     low = tmp_path / "low.txt"
     low.write_text("boundary 0 0 0 6 3 0.9\n")
-    assert_user_error(run("tello", "fly", low, "--start", "1", "1", "0", "--goal", "5", "2",
+    assert_user_error(run_here("tello", "fly", low, "--start", "1", "1", "0", "--goal", "5", "2",
                           "0", "--dry-run", "--quiet", "-o", tmp_path / "out"),
                       "geofence", "the takeoff", "nothing was sent")
     assert not (tmp_path / "out").exists()
