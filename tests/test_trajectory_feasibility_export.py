@@ -12,7 +12,7 @@ import pytest
 from quadnav.errors import QuadnavError
 from quadnav.trajectory.cubic import cubic_spline
 from quadnav.trajectory.export import CSV_HEADER, mp_csv, trajectory_csv
-from quadnav.trajectory.feasibility import GRAVITY, Limits, feasibility
+from quadnav.trajectory.feasibility import GRAVITY, Limits, feasibility, quantities
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.quintic import quintic_c2
 from quadnav.trajectory.reference import samples_at
@@ -69,6 +69,44 @@ def test_exceeded_limits_are_named_with_value_limit_and_time():
     assert summary.startswith("NOT feasible: 3 violations")
     assert "max tilt 10.7 deg" in summary and "(limit 10 deg)" in summary
     assert "max acceleration 1.85 m/s^2" in summary and "(limit 4 m/s^2)" in summary
+
+
+def test_the_roll_pitch_acceleration_is_the_thrust_directions_turn_differentiated():
+    # The closed form against finite differences of b x b', b the thrust direction
+    # (acceleration + gravity + drag), on a curve through a waypoint, away from it (where
+    # a C2 quintic's jerk may jump).
+    trajectory = quintic_c2([[0.0, 0.0, 1.0], [2.0, 1.0, 1.5], [3.0, -1.0, 1.0]], [1.5, 1.5])
+    limits = Limits(drag=(0.5, 0.5, 0.7))
+    drag = np.array(limits.drag)
+
+    def direction(t):
+        thrust = (trajectory.acceleration(t) + [0.0, 0.0, GRAVITY]
+                  + drag * trajectory.velocity(t))
+        return thrust / np.linalg.norm(thrust, axis=1)[:, None]
+
+    def turn(t, h=1e-4):
+        return np.cross(direction(t), (direction(t + h) - direction(t - h)) / (2 * h))
+
+    t = np.concatenate([np.linspace(0.2, 1.3, 12), np.linspace(1.7, 2.8, 12)])
+    h = 1e-3
+    measured = np.linalg.norm((turn(t + h) - turn(t - h)) / (2 * h), axis=1)
+    series = quantities(*(trajectory.derivative(t, order) for order in (1, 2, 3, 4)), limits)
+    assert np.allclose(series["max_angular_acceleration"], measured, rtol=1e-5, atol=1e-6)
+    assert np.allclose(series["max_body_rate"], np.linalg.norm(turn(t), axis=1), rtol=1e-6)
+    assert measured.max() > 1.0  # the curve does turn the body
+
+
+def test_a_roll_pitch_acceleration_beyond_the_limit_is_named():
+    limits = Limits(angular_acceleration_max=0.5)
+    report = feasibility(quintic_c2([[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [2.0, 2.0, 1.0]],
+                                    [2.0, 2.0]), None, limits)
+    assert not report.ok
+    peak = report.max_angular_acceleration
+    assert report.violations == (
+        f"roll/pitch acceleration {peak.value:.3g} rad/s^2 exceeds the limit 0.5 rad/s^2 at "
+        f"t = {peak.t:.2f} s",)
+    assert report.as_dict()["max_angular_acceleration"] == peak.as_dict()
+    assert "max roll/pitch acceleration" in report.summary()
 
 
 def test_clearance_in_a_world_and_a_collision():

@@ -20,7 +20,12 @@ from quadnav.vehicle.dynamics import (
     vehicle_arrays,
 )
 from quadnav.vehicle.params import VehicleParams, load_params, preset_names
-from quadnav.vehicle.rotors import allocation_matrix, mix
+from quadnav.vehicle.rotors import (
+    allocation_matrix,
+    mix,
+    roll_pitch_acceleration_max,
+    rotor_positions,
+)
 
 TELLO = load_params("tello")
 RBE595 = load_params("rbe595")
@@ -191,3 +196,25 @@ def test_quaternion_round_trips_through_a_matrix():
         r = quaternion.to_matrix(q)
         assert np.allclose(r @ r.T, np.eye(3), atol=1e-12)
         assert np.allclose(quaternion.from_matrix(r), q, atol=1e-12)
+
+
+@pytest.mark.parametrize("params", [TELLO, RBE595], ids=["tello", "rbe595"])
+@pytest.mark.parametrize("axis", [0, 1], ids=["roll", "pitch"])
+def test_the_roll_pitch_acceleration_bound_is_what_the_rotors_give_about_the_hover(params,
+                                                                                   axis):
+    # The rotors on one side at the hover's thrust plus the most they can add, on the
+    # other minus as much: the dynamics turn the body at the bound, hold the height and
+    # make no yaw.
+    hover = params.weight / 4
+    change = min(hover, params.max_rotor_thrust - hover)
+    lever = rotor_positions(params)[:, 1 - axis] * (1 if axis == 0 else -1)
+    commands = np.where(lever > 0, hover + change, hover - change) / params.max_rotor_thrust
+    state = hover_state(params, [0.0, 0.0, 5.0])
+    state[13:17] = params.rotor_speed_max * np.sqrt(commands)  # no motor lag to wait for
+    dt = 1e-5
+    end = _fly(params, state, commands, dt, dt=dt)
+    rates = end[10:13] / dt  # body rates gained over dt, rad/s^2
+    assert rates[axis] == pytest.approx(roll_pitch_acceleration_max(params), rel=1e-6)
+    assert abs(rates[1 - axis]) < 1e-9 and abs(rates[2]) < 1e-9
+    assert abs(end[5]) < 1e-12  # the collective still holds the weight
+    assert roll_pitch_acceleration_max(RBE595) == pytest.approx(3.4326, rel=1e-4)

@@ -1,17 +1,22 @@
 """Can a Tello-class quadrotor fly a trajectory? Peaks of speed, acceleration, jerk, thrust,
-tilt and body rate against :class:`Limits`, and the clearance left to the obstacles.
+tilt, body rate and angular acceleration against :class:`Limits`, and the clearance left to
+the obstacles.
 
 The thrust a quadrotor needs, per unit mass, is ``f = a + g e_z + D v`` (``a`` the
 acceleration, ``e_z`` up, ``D`` its linear drag per unit mass, ``v`` the velocity): its
 size over ``g`` is the thrust-to-weight ratio it must produce, and its angle from ``e_z``
 the tilt of the body. The body turns as ``f`` does: the roll and pitch rate is the rate of
-the thrust direction, ``|f' - b (b . f')| / |f|`` with ``b = f / |f|`` and
-``f' = j + D a`` (``j`` the jerk). Everything is sampled every ``dt`` s and at every
-waypoint time, so a peak between samples can be missed by a little.
+the thrust direction, ``|b'| = |f' - b (b . f')| / |f|`` with ``b = f / |f|`` and
+``f' = j + D a`` (``j`` the jerk), and its roll and pitch angular acceleration, which the
+rotors' torque must give, is ``|b x b''| = |(f'' - b (b . f'')) - 2 (b . f') b'| / |f|``
+with ``f'' = s + D j`` (``s`` the snap; differentiate ``f = |f| b`` twice). A trajectory
+whose jerk jumps at a waypoint (a cubic's) asks for an impulse of angular acceleration
+there, which samples of the snap do not see. Everything is sampled every ``dt`` s and at
+every waypoint time, so a peak between samples can be missed by a little.
 
-Flying a trajectory ``k`` times slower divides speeds by ``k``, accelerations by ``k^2``
-and jerks by ``k^3``: :func:`slowest_feasible_scale` finds the least ``k`` that brings every
-quantity within the limits.
+Flying a trajectory ``k`` times slower divides speeds by ``k``, accelerations by ``k^2``,
+jerks by ``k^3`` and snaps by ``k^4``: :func:`slowest_feasible_scale` finds the least ``k``
+that brings every quantity within the limits.
 """
 
 from __future__ import annotations
@@ -50,6 +55,8 @@ class Limits:
         thrust_to_weight_min: smallest thrust over weight the motors give, > 0, or
             ``None`` for no limit.
         body_rate_max: largest roll and pitch rate, rad/s, > 0, or ``None`` for no limit.
+        angular_acceleration_max: largest roll and pitch angular acceleration, rad/s^2,
+            > 0, or ``None`` for no limit.
         drag: (3,) linear drag per unit mass along x, y, z, 1/s, >= 0 (the thrust also
             pushes against it).
     """
@@ -61,6 +68,7 @@ class Limits:
     tilt_max: float = math.radians(35.0)
     thrust_to_weight_min: float | None = None
     body_rate_max: float | None = None
+    angular_acceleration_max: float | None = None
     drag: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
@@ -111,9 +119,11 @@ _QUANTITIES = (
     _Quantity("max_tilt", "tilt", " deg", math.degrees(1.0), "tilt_max"),
     _Quantity("max_body_rate", "roll/pitch rate", " deg/s", math.degrees(1.0),
               "body_rate_max"),
+    _Quantity("max_angular_acceleration", "roll/pitch acceleration", " rad/s^2", 1.0,
+              "angular_acceleration_max"),
 )
 #: Limits that may be None (no limit).
-_OPTIONAL = ("jerk_max", "thrust_to_weight_min", "body_rate_max")
+_OPTIONAL = ("jerk_max", "thrust_to_weight_min", "body_rate_max", "angular_acceleration_max")
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,6 +140,7 @@ class FeasibilityReport:
         min_thrust_to_weight: smallest ``|f| / g``.
         max_tilt: largest angle between ``f`` and ``e_z``, rad.
         max_body_rate: largest roll and pitch rate, rad/s.
+        max_angular_acceleration: largest roll and pitch angular acceleration, rad/s^2.
         min_clearance: smallest clearance of the sampled positions in the world, m
             (negative inside an obstacle), or ``None`` when no world was given.
         limits: the limits checked.
@@ -146,6 +157,7 @@ class FeasibilityReport:
     min_thrust_to_weight: Peak
     max_tilt: Peak
     max_body_rate: Peak
+    max_angular_acceleration: Peak
     min_clearance: Peak | None
     limits: Limits
     world_name: str | None
@@ -223,11 +235,11 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
 
 
 def _motion(trajectory: Trajectory, dt: float
-            ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Times (N,) s every ``dt`` s and at every waypoint, and the velocity, acceleration
-    and jerk (N, 3) there."""
+            ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Times (N,) s every ``dt`` s and at every waypoint, and the velocity, acceleration,
+    jerk and snap (N, 3) there."""
     t = np.union1d(trajectory.sample(dt).t, trajectory.breaks)
-    return t, *(trajectory.derivative(t, order) for order in (1, 2, 3))
+    return t, *(trajectory.derivative(t, order) for order in (1, 2, 3, 4))
 
 
 def _breaks(q: _Quantity, worst: float, limits: Limits) -> bool:
@@ -236,16 +248,24 @@ def _breaks(q: _Quantity, worst: float, limits: Limits) -> bool:
     return limit is not None and (worst > limit if q.largest else worst < limit)
 
 
+def _across(direction: FloatArray, vectors: FloatArray) -> FloatArray:
+    """The parts (N, 3) of ``vectors`` (N, 3) across the unit ``direction`` (N, 3)."""
+    return vectors - direction * np.einsum("ij,ij->i", direction, vectors)[:, None]
+
+
 def quantities(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
-               limits: Limits) -> dict[str, FloatArray]:
-    """Each checked quantity (N,) from the velocity, acceleration and jerk (N, 3), SI
-    units, by the field names of :class:`FeasibilityReport` (module docstring)."""
+               snap: FloatArray, limits: Limits) -> dict[str, FloatArray]:
+    """Each checked quantity (N,) from the velocity, acceleration, jerk and snap (N, 3),
+    SI units, by the field names of :class:`FeasibilityReport` (module docstring)."""
     drag = np.asarray(limits.drag)
     thrust = acceleration + np.array([0.0, 0.0, GRAVITY]) + drag * velocity
     size = np.linalg.norm(thrust, axis=1)
     turn = jerk + drag * acceleration
     direction = thrust / size[:, None]
-    sideways = turn - direction * np.einsum("ij,ij->i", direction, turn)[:, None]
+    sideways = _across(direction, turn)
+    growth = np.einsum("ij,ij->i", direction, turn)  # d|f|/dt
+    tilt_acceleration = (_across(direction, snap + drag * jerk)
+                         - 2.0 * (growth / size)[:, None] * sideways)
     return {
         "max_speed": np.linalg.norm(velocity, axis=1),
         "max_acceleration": np.linalg.norm(acceleration, axis=1),
@@ -254,13 +274,14 @@ def quantities(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
         "min_thrust_to_weight": size / GRAVITY,
         "max_tilt": np.arctan2(np.hypot(thrust[:, 0], thrust[:, 1]), thrust[:, 2]),
         "max_body_rate": np.linalg.norm(sideways, axis=1) / size,
+        "max_angular_acceleration": np.linalg.norm(tilt_acceleration, axis=1) / size,
     }
 
 
 def _within(velocity: FloatArray, acceleration: FloatArray, jerk: FloatArray,
-            limits: Limits) -> bool:
+            snap: FloatArray, limits: Limits) -> bool:
     """Whether every quantity is within ``limits``."""
-    series = quantities(velocity, acceleration, jerk, limits)
+    series = quantities(velocity, acceleration, jerk, snap, limits)
     return not any(_breaks(q, float(series[q.field].max() if q.largest
                                     else series[q.field].min()), limits)
                    for q in _QUANTITIES)
@@ -271,10 +292,10 @@ def slowest_feasible_scale(trajectory: Trajectory, limits: Limits, dt: float = 0
     """The least factor ``k >= 1`` by which flying ``trajectory`` ``k`` times slower keeps
     every sampled quantity within ``limits`` (to 0.1 %), or None when even ``largest``
     does not (e.g. a thrust floor that slowing down cannot meet)."""
-    _, v, a, j = _motion(trajectory, dt)
+    _, v, a, j, s = _motion(trajectory, dt)
 
     def ok(k: float) -> bool:
-        return _within(v / k, a / k**2, j / k**3, limits)
+        return _within(v / k, a / k**2, j / k**3, s / k**4, limits)
 
     if ok(1.0):
         return 1.0

@@ -18,7 +18,8 @@ with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
 3. :func:`stretch_where_fast` stretches the times of the segments whose speed or
    acceleration still exceeds a limit (a polynomial rounds off the profile's corners
    and overshoots a little) — and, given the vehicle's :class:`Limits`, whose roll and
-   pitch rate does (quick turns at speed ask for fast rotations) — and finally all of
+   pitch rate or angular acceleration does (quick turns at speed ask for fast rotations,
+   sudden ones for strong torques) — and finally all of
    them alike if a few local rounds were not enough, so the result is always within the
    speed and acceleration limits.
 """
@@ -150,16 +151,26 @@ def segment_excess(trajectory: Trajectory, v_max: float, a_max: float,
                    vehicle: Limits | None = None) -> FloatArray:
     """Per segment (S,), the factor by which its times must stretch to bring its sampled
     peak speed within ``v_max`` m/s, acceleration within ``a_max`` m/s^2 and, given
-    ``vehicle``, roll/pitch rate within its ``body_rate_max`` (stretching by k divides
-    speeds by k, accelerations by k^2 and, about, the rate by k^3); <= 1 where within."""
+    ``vehicle``, roll/pitch rate within its ``body_rate_max`` and roll/pitch angular
+    acceleration within its ``angular_acceleration_max`` (stretching by k divides speeds
+    by k, accelerations by k^2 and, about, the rate by k^3 and the angular acceleration by
+    k^4); <= 1 where within."""
     t = _sample_times(trajectory)
     velocity, acceleration = trajectory.velocity(t), trajectory.acceleration(t)
     excess = np.maximum(np.linalg.norm(velocity, axis=1) / v_max,
                         np.sqrt(np.linalg.norm(acceleration, axis=1) / a_max))
-    if vehicle is not None and vehicle.body_rate_max is not None:
-        rate = quantities(velocity, acceleration, trajectory.jerk(t),
-                          vehicle)["max_body_rate"]
-        excess = np.maximum(excess, np.cbrt(rate / vehicle.body_rate_max))
+    # Each vehicle limit: the quantity, the limit and the root that undoes a stretch.
+    bounds = [] if vehicle is None else [
+        (name, limit, root) for name, limit, root in (
+            ("max_body_rate", vehicle.body_rate_max, np.cbrt),
+            ("max_angular_acceleration", vehicle.angular_acceleration_max,
+             lambda ratio: np.sqrt(np.sqrt(ratio))))
+        if limit is not None]
+    if bounds:
+        series = quantities(velocity, acceleration, trajectory.jerk(t), trajectory.snap(t),
+                            vehicle)
+        for name, limit, root in bounds:
+            excess = np.maximum(excess, root(series[name] / limit))
     per_segment = excess[:-1].reshape(-1, SAMPLES_PER_SEGMENT).max(axis=1)
     ends = excess[SAMPLES_PER_SEGMENT::SAMPLES_PER_SEGMENT]  # the break ending each segment
     return np.maximum(per_segment, ends)

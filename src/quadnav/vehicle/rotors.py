@@ -43,6 +43,19 @@ def allocation_matrix(params: VehicleParams) -> FloatArray:
     ])
 
 
+def roll_pitch_acceleration_max(params: VehicleParams) -> float:
+    """The largest roll or pitch angular acceleration, rad/s^2, the rotors give while
+    they hold the hover's collective thrust: each rotor's thrust moved from a quarter of
+    the weight by as much as it can go both ways (to zero, or to full), on the side
+    that turns the body, over the body's inertia about that axis (the smaller of the
+    two). Roll and pitch moves of this kind make no yaw torque."""
+    hover = params.weight / 4.0
+    change = min(hover, params.max_rotor_thrust - hover)
+    positions = rotor_positions(params)
+    torques = change * np.abs(positions[:, [1, 0]]).sum(axis=0)  # about x, about y
+    return float(np.min(torques / params.inertia[:2]))
+
+
 @njit(cache=True)
 def mix(wrench: np.ndarray, mixer: np.ndarray, max_thrust: float) -> tuple[np.ndarray, bool]:
     """Per-rotor thrusts (4,) N in ``[0, max_thrust]`` for a wrench ``[T, tau_x, tau_y,
