@@ -195,3 +195,22 @@ def test_a_slow_turning_vehicle_is_flown_within_its_rotors_torque_and_reaches_th
         vehicle=unbounded), space)
     assert feasibility(asked, None, limits).max_angular_acceleration.value > (
         limits.angular_acceleration_max)
+
+
+def test_a_trajectory_beyond_the_torque_is_refused_with_settings_that_fly(tmp_path):
+    # A quintic passes its waypoints at rest in acceleration: at 3 m/s it asks the rbe595
+    # preset for more roll/pitch acceleration than half of its rotors' torque gives.
+    query = ("forest", "--params", "rbe595", "--method", "quintic", "--speed", "3")
+    result = run_here("fly", *query, "--quiet", "--no-figures", "-o", tmp_path / "out")
+    assert_user_error(result, "the rbe595 vehicle cannot fly this trajectory: roll/pitch "
+                      "acceleration", "(with 50% of the torque kept for control)",
+                      "the same path flies within every limit at --speed 3 --accel")
+    value, limit = re.search(r"acceleration ([\d.]+) rad/s\^2 exceeds the limit ([\d.]+) "
+                             r"rad/s\^2", result.stderr).groups()
+    assert float(value) > float(limit)  # written apart, however close
+    assert not (tmp_path / "out").exists()
+    accel = result.stderr.split("--accel ")[1].split()[0]
+    advised = run_here("fly", *query, "--accel", accel, "--quiet", "--no-figures",
+                       "-o", tmp_path / "advised")
+    assert advised.returncode == 0, advised.stderr
+    assert json.loads((tmp_path / "advised" / "metrics.json").read_text())["success"]

@@ -93,8 +93,10 @@ def flyable_trajectory(path: FloatArray, settings: TrajectorySettings, space: Sa
     advice = ("no slower flight of it would either" if slower is None else
               f"the same path flies within every limit at --speed "
               f"{_down(slower[1].v_max):g} --accel {_down(slower[1].a_max):g} or less")
+    kept = (f"{1 - TORQUE_HEADROOM:.0%} of the torque"
+            if report.broken[0] == "angular_acceleration_max" else f"{1 - HEADROOM:.0%}")
     raise QuadnavError(f"the {vehicle.name} vehicle cannot fly this trajectory: "
-                       f"{report.violations[0]} (with {1 - HEADROOM:.0%} kept for control); "
+                       f"{report.violations[0]} (with {kept} kept for control); "
                        f"{advice}")
 
 

@@ -146,6 +146,8 @@ class FeasibilityReport:
         limits: the limits checked.
         world_name: the world's name, or ``None``.
         violations: one line per exceeded limit, naming the quantity, value, limit and time.
+        broken: the :class:`Limits` field of each exceeded limit, in the order of
+            ``violations`` (a touched obstacle, the last violation, has none).
     """
 
     dt: float
@@ -162,6 +164,7 @@ class FeasibilityReport:
     limits: Limits
     world_name: str | None
     violations: tuple[str, ...]
+    broken: tuple[str, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -214,13 +217,15 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
     t, *motion = _motion(trajectory, dt)
     series = quantities(*motion, limits)
     peaks = {q.field: _peak(series[q.field], t, q.largest) for q in _QUANTITIES}
-    violations = []
+    violations, broken = [], []
     for q in _QUANTITIES:
         peak, limit = peaks[q.field], getattr(limits, q.limit)
         if _breaks(q, peak.value, limits):
             bound = "exceeds the limit" if q.largest else "is below the least"
-            violations.append(f"{q.label} {peak.value * q.shown:.3g}{q.unit} {bound} "
-                              f"{limit * q.shown:.3g}{q.unit} at t = {peak.t:.2f} s")
+            value, shown_limit = _apart(peak.value * q.shown, limit * q.shown)
+            violations.append(f"{q.label} {value}{q.unit} {bound} {shown_limit}{q.unit} at "
+                              f"t = {peak.t:.2f} s")
+            broken.append(q.limit)
     clearance = None
     if free_world is not None:
         clearance = _peak(free_world.clearances(trajectory.position(t)), t, largest=False)
@@ -231,7 +236,17 @@ def feasibility(trajectory: Trajectory, free_world: World | None, limits: Limits
     return FeasibilityReport(dt=float(dt), duration=trajectory.duration, **peaks,
                              min_clearance=clearance, limits=limits,
                              world_name=None if free_world is None else free_world.name,
-                             violations=tuple(violations))
+                             violations=tuple(violations), broken=tuple(broken))
+
+
+def _apart(value: float, limit: float) -> tuple[str, str]:
+    """``value`` and ``limit`` written with 3 significant digits, or with as many more (up
+    to 6) as it takes to tell them apart."""
+    for digits in range(3, 7):
+        shown = f"{value:.{digits}g}", f"{limit:.{digits}g}"
+        if shown[0] != shown[1]:
+            break
+    return shown
 
 
 def _motion(trajectory: Trajectory, dt: float
