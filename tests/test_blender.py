@@ -12,6 +12,7 @@ from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
 import pytest
+from clitools import run
 from matplotlib.image import imread
 
 from quadnav.cli.main import main
@@ -78,6 +79,17 @@ def test_summary_line(written, run_folder):
            in lines[0]
     assert lines[0].startswith(f"wrote {out / 'scene.blend'} (")
     assert lines[0].endswith(f"), {out / 'oblique.png'}, {out / 'top.png'}")
+
+
+def test_a_new_process_prints_only_its_summary(bpy, run_folder, tmp_path):
+    # Importing bpy 4.x prints NumPy 2's notice (with a traceback) about a module it ships
+    # built for NumPy 1.x, and a headless machine's audio warning: the command keeps both
+    # off the terminal, as it does Blender's other printing.
+    result = run("blender", run_folder, "-o", tmp_path / "scene.blend")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    [line] = result.stdout.splitlines()
+    assert line.startswith(f"wrote {tmp_path / 'scene.blend'} (")
 
 
 def test_blocks_are_cubes_in_their_colours(opened, run_folder):

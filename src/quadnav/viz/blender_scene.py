@@ -439,8 +439,8 @@ def write_blender(run: Run, blend: str | Path, renders: Sequence[str | Path] = (
     """
     check_blend_path(blend)
     cameras = [render_camera(path) for path in renders]
-    bpy = require_bpy()
-    with _blender_output():
+    with _blender_output():  # bpy 4.x prints NumPy 2's notice about a module of its own
+        bpy = require_bpy()  # built for NumPy 1.x (harmless) and a headless audio warning
         info = build_scene(bpy, run, size, fps)
     save_blend(bpy, blend)
     for camera, path in zip(cameras, renders, strict=True):
