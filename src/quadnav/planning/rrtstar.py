@@ -65,7 +65,7 @@ def empty_tree(capacity: int) -> Tree:
         parent=np.full(capacity, -1, dtype=np.int64),
         first_child=np.full(capacity, -1, dtype=np.int64),
         next_sibling=np.full(capacity, -1, dtype=np.int64),
-        goal_vertices=np.zeros(capacity, dtype=np.int64),
+        goal_distance=np.full(capacity, np.inf),
         near=np.zeros(capacity, dtype=np.int64),
         near_distance=np.zeros(capacity),
         near_order=np.zeros(capacity),
@@ -81,7 +81,7 @@ def grown_tree(tree: Tree, capacity: int, origin: np.ndarray, extent: np.ndarray
     the box ``origin`` (3,), ``extent`` (3,) is rebuilt; counts and best are shared."""
     count = int(tree.counts[NODES])
     bigger = empty_tree(capacity)._replace(counts=tree.counts, best=tree.best)
-    for name in ("nodes", "cost", "parent", "first_child", "next_sibling", "goal_vertices"):
+    for name in ("nodes", "cost", "parent", "first_child", "next_sibling", "goal_distance"):
         getattr(bigger, name)[:count] = getattr(tree, name)[:count]
     rebuild(bigger.nodes, count, origin, extent, *bigger.node_grid)
     return bigger

@@ -17,7 +17,8 @@ One iteration, as the course reports and Karaman & Frazzoli (2011) describe it:
    change of cost is pushed down to their descendants;
 7. goal: a vertex within ``goal_tolerance`` of the goal with a free straight segment to
    it joins the goal set; the best solution is the cheapest vertex of that set plus its
-   last segment.
+   last segment. A rewire only lowers costs, so the best is kept by offering it each goal
+   vertex whose cost fell (while the change is pushed down), not by a scan of the set.
 
 All state lives in arrays owned by the caller (see :class:`TreeState` in ``rrtstar.py``)
 so that the search can be run in chunks between wall-clock checks.
@@ -122,9 +123,20 @@ def _link_child(vertex, new_parent, parent, first_child, next_sibling):
     first_child[new_parent] = vertex
 
 
+@njit(cache=True, inline="always")
+def _offer(vertex, cost, goal_distance, best):
+    """Make ``vertex`` the best solution's last vertex if it is a goal vertex (a finite
+    ``goal_distance``) whose path is shorter than the best."""
+    total = cost[vertex] + goal_distance[vertex]
+    if total < best[BEST_COST]:
+        best[BEST_COST], best[BEST_VERTEX] = total, vertex
+
+
 @njit(cache=True)
-def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack):
-    """Add ``delta`` metres to the cost of every descendant of ``root`` (not root)."""
+def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack, goal_distance,
+                        best):
+    """Add ``delta`` metres (< 0) to the cost of every descendant of ``root`` (not root),
+    offering each to the best solution."""
     top = 0
     c = first_child[root]
     while c >= 0:
@@ -135,6 +147,7 @@ def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack):
         top -= 1
         v = stack[top]
         cost[v] += delta
+        _offer(v, cost, goal_distance, best)
         c = first_child[v]
         while c >= 0:
             stack[top] = c
@@ -143,25 +156,14 @@ def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack):
 
 
 @njit(cache=True)
-def _update_best(goal, nodes, cost, goal_vertices, counts, best):
-    """Recompute the best solution over the goal set; True when it got shorter."""
-    improved = False
-    for g in range(counts[GOAL_VERTICES]):
-        v = goal_vertices[g]
-        total = cost[v] + _norm(nodes[v], goal)
-        if total < best[BEST_COST]:
-            best[BEST_COST], best[BEST_VERTEX] = total, v
-            improved = True
-    return improved
-
-
-@njit(cache=True)
-def _try_goal(vertex, goal, goal_tolerance, nodes, grid, goal_vertices, counts):
-    """Add ``vertex`` to the goal set if it reaches the goal by a free straight segment."""
-    if _norm(nodes[vertex], goal) <= goal_tolerance and grid_segment_free(nodes[vertex], goal,
-                                                                          grid):
-        goal_vertices[counts[GOAL_VERTICES]] = vertex
+def _try_goal(vertex, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best):
+    """Add ``vertex`` to the goal set if it reaches the goal by a free straight segment,
+    and offer it to the best solution."""
+    distance = _norm(nodes[vertex], goal)
+    if distance <= goal_tolerance and grid_segment_free(nodes[vertex], goal, grid):
+        goal_distance[vertex] = distance
         counts[GOAL_VERTICES] += 1
+        _offer(vertex, cost, goal_distance, best)
 
 
 class Query(NamedTuple):
@@ -184,7 +186,7 @@ class Tree(NamedTuple):
     parent: np.ndarray  # (C,) parent vertex, -1 for the root
     first_child: np.ndarray  # (C,) children as linked lists
     next_sibling: np.ndarray  # (C,)
-    goal_vertices: np.ndarray  # (C,) vertices joined to the goal
+    goal_distance: np.ndarray  # (C,) m from a goal vertex to the goal, inf for the others
     near: np.ndarray  # (C,) scratch: the near vertices of a new one
     near_distance: np.ndarray  # (C,) scratch
     near_order: np.ndarray  # (C,) scratch
@@ -200,7 +202,7 @@ def start_tree(query: Query, tree: Tree) -> None:
     once."""
     start, goal, settings, _, grid, origin, extent = query
     goal_tolerance = settings[2]
-    nodes, cost, parent, first_child, next_sibling, goal_vertices = tree[:6]
+    nodes, cost, parent, first_child, next_sibling, goal_distance = tree[:6]
     node_grid, counts, best = tree.node_grid, tree.counts, tree.best
     heads, next_in_cell, shape, inverse_cell = node_grid
     # The root's index is read from the (empty) tree's counts, so it has the type of the
@@ -214,8 +216,7 @@ def start_tree(query: Query, tree: Tree) -> None:
     next_sibling[root] = -1
     counts[NODES] = root + 1
     insert(root, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
-    _try_goal(root, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
-    _update_best(goal, nodes, cost, goal_vertices, counts, best)
+    _try_goal(root, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best)
 
 
 @njit(cache=True)
@@ -223,7 +224,7 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
     """Run up to ``iterations`` RRT* iterations; returns early when ``stop_on_solution``
     and a solution exists. Capacity for ``iterations`` more vertices must be free."""
     start, goal, settings, rotation, grid, origin, extent = query
-    nodes, cost, parent, first_child, next_sibling, goal_vertices = tree[:6]
+    nodes, cost, parent, first_child, next_sibling, goal_distance = tree[:6]
     near, near_distance, near_order, stack = tree[6:10]
     node_grid, counts, best = tree.node_grid, tree.counts, tree.best
     heads, next_in_cell, shape, inverse_cell = node_grid
@@ -267,10 +268,13 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
         best_cost = cost[closest] + _norm(nodes[closest], new)
         for k in range(m):
             near_order[k] = cost[near[k]] + near_distance[k]
-        order = np.argsort(near_order[:m])
         checked = np.zeros(m, dtype=np.int8)  # 0 unknown, 1 free, 2 blocked
-        for k in order:
-            if near_order[k] >= best_cost:
+        while True:  # the cheapest untried candidate, by a scan: the first is usually free
+            k = -1
+            for i in range(m):
+                if checked[i] == 0 and (k < 0 or near_order[i] < near_order[k]):
+                    k = i
+            if k < 0 or near_order[k] >= best_cost:
                 break
             if grid_segment_free(nodes[near[k]], new, grid):
                 best_parent, best_cost = near[k], near_order[k]
@@ -286,7 +290,6 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
         counts[NODES] = n + 1
         insert(v, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
         # Rewire the near vertices that get cheaper through the new one.
-        rewired = False
         for k in range(m):
             u = near[k]
             through = best_cost + near_distance[k]
@@ -296,10 +299,7 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
                 _unlink_child(u, parent, first_child, next_sibling)
                 _link_child(u, v, parent, first_child, next_sibling)
                 _shift_subtree_cost(u, through - cost[u], cost, first_child, next_sibling,
-                                    stack)
+                                    stack, goal_distance, best)
                 cost[u] = through
-                rewired = True
-        before = counts[GOAL_VERTICES]
-        _try_goal(v, goal, goal_tolerance, nodes, grid, goal_vertices, counts)
-        if rewired or counts[GOAL_VERTICES] > before:
-            _update_best(goal, nodes, cost, goal_vertices, counts, best)
+                _offer(u, cost, goal_distance, best)
+        _try_goal(v, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best)
