@@ -71,7 +71,7 @@ def empty_tree(capacity: int) -> Tree:
         near_order=np.zeros(capacity),
         stack=np.zeros(capacity, dtype=np.int64),
         node_grid=new_node_grid(capacity),
-        counts=np.zeros(3, dtype=np.int64),
+        counts=np.zeros(2, dtype=np.int64),
         best=np.array([np.inf, -1.0]),
     )
 

@@ -36,7 +36,7 @@ from quadnav.planning.nodegrid import insert, nearest, within
 from quadnav.world.blockgrid import grid_segment_free
 
 # Counters in the ``counts`` array.
-NODES, ITERATIONS, GOAL_VERTICES = 0, 1, 2
+NODES, ITERATIONS = 0, 1
 # Entries of the ``best`` array: length of the best solution (inf if none) and its last
 # tree vertex (-1 if none).
 BEST_COST, BEST_VERTEX = 0, 1
@@ -156,13 +156,12 @@ def _shift_subtree_cost(root, delta, cost, first_child, next_sibling, stack, goa
 
 
 @njit(cache=True)
-def _try_goal(vertex, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best):
+def _try_goal(vertex, goal, goal_tolerance, nodes, cost, grid, goal_distance, best):
     """Add ``vertex`` to the goal set if it reaches the goal by a free straight segment,
     and offer it to the best solution."""
     distance = _norm(nodes[vertex], goal)
     if distance <= goal_tolerance and grid_segment_free(nodes[vertex], goal, grid):
         goal_distance[vertex] = distance
-        counts[GOAL_VERTICES] += 1
         _offer(vertex, cost, goal_distance, best)
 
 
@@ -192,7 +191,7 @@ class Tree(NamedTuple):
     near_order: np.ndarray  # (C,) scratch
     stack: np.ndarray  # (C,) scratch: subtree walk
     node_grid: tuple  # the vertices by cell (quadnav.planning.nodegrid)
-    counts: np.ndarray  # (3,) int: NODES, ITERATIONS, GOAL_VERTICES
+    counts: np.ndarray  # (2,) int: NODES, ITERATIONS
     best: np.ndarray  # (2,): BEST_COST m, BEST_VERTEX (-1: none)
 
 
@@ -216,7 +215,7 @@ def start_tree(query: Query, tree: Tree) -> None:
     next_sibling[root] = -1
     counts[NODES] = root + 1
     insert(root, nodes, origin, extent, heads, next_in_cell, shape, inverse_cell)
-    _try_goal(root, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best)
+    _try_goal(root, goal, goal_tolerance, nodes, cost, grid, goal_distance, best)
 
 
 @njit(cache=True)
@@ -302,4 +301,4 @@ def grow(rng, iterations: int, stop_on_solution: bool, query: Query, tree: Tree)
                                     stack, goal_distance, best)
                 cost[u] = through
                 _offer(u, cost, goal_distance, best)
-        _try_goal(v, goal, goal_tolerance, nodes, cost, grid, goal_distance, counts, best)
+        _try_goal(v, goal, goal_tolerance, nodes, cost, grid, goal_distance, best)
