@@ -19,8 +19,8 @@ import numpy as np
 
 from quadnav.hardware.arc import Arc
 from quadnav.hardware.frames import IntArray
-from quadnav.hardware.moves import GO_MAX_CM, Move, MoveError, is_long_enough
-from quadnav.hardware.sdk import CURVE_RADIUS_CM, circumradius
+from quadnav.hardware.moves import Move, MoveError
+from quadnav.hardware.sdk import SdkError, parse_command
 from quadnav.planning.result import nearest_on_polyline
 
 #: Farthest a command's path may come from the trajectory's samples it stands for, cm.
@@ -61,18 +61,14 @@ class Curve:
         return Arc(np.zeros(3), self.via, self.end).length / self.speed
 
 
-def _curve_ok(via: IntArray, end: IntArray) -> bool:
-    """Whether the SDK flies a ``curve`` through these steps (cm): each within
-    +-:data:`GO_MAX_CM`, each long enough, the radius within :data:`CURVE_RADIUS_CM`."""
-    steps = np.stack([via, end])
-    if np.any(np.abs(steps) > GO_MAX_CM) or not (is_long_enough(via) and is_long_enough(end)):
+def _sdk_flies(command: str) -> bool:
+    """Whether the Tello SDK takes ``command`` (a ``curve``: its ranges, its shortest step
+    and its radii), as :func:`~quadnav.hardware.sdk.parse_command` reads it."""
+    try:
+        parse_command(command)
+    except SdkError:
         return False
-    return CURVE_RADIUS_CM[0] <= circumradius(np.zeros(3), via, end) <= CURVE_RADIUS_CM[1]
-
-
-def _line_ok(step: IntArray) -> bool:
-    """Whether the SDK flies a ``go`` of this step (cm)."""
-    return bool(np.all(np.abs(step) <= GO_MAX_CM)) and is_long_enough(step)
+    return True
 
 
 def _off_line(points: np.ndarray, start: IntArray, end: IntArray) -> float:
@@ -115,12 +111,15 @@ def _command(samples: np.ndarray, here: IntArray, i: int, j: int, go_speed: int,
     end = np.rint(samples[j]).astype(np.int64)
     stretch = samples[i:j + 1]
     via = np.rint(samples[(i + j) // 2]).astype(np.int64)
-    if _curve_ok(via - here, end - here):
+    curve = Curve(tuple(map(int, via - here)), tuple(map(int, end - here)), curve_speed)
+    if _sdk_flies(curve.command):
         arc = Arc(here, via, end)
         if arc.distances(stretch).max() <= TOLERANCE_CM and arc_allowed(here, via, end):
-            return Curve(tuple(map(int, via - here)), tuple(map(int, end - here)),
-                         curve_speed), end, j
-    if (_line_ok(end - here) and _off_line(stretch, here, end) <= TOLERANCE_CM
-            and line_allowed(here, end)):
-        return Move(*map(int, end - here), go_speed), end, j
+            return curve, end, j
+    try:
+        move = Move(*map(int, end - here), go_speed)  # refused as the SDK refuses it
+    except MoveError:
+        return None
+    if _off_line(stretch, here, end) <= TOLERANCE_CM and line_allowed(here, end):
+        return move, end, j
     return None
