@@ -164,7 +164,7 @@ class FeasibilityReport:
     limits: Limits
     world_name: str | None
     violations: tuple[str, ...]
-    broken: tuple[str, ...] = ()
+    broken: tuple[str, ...]
 
     @property
     def ok(self) -> bool:
