@@ -14,7 +14,7 @@ from urllib.parse import urlsplit
 
 import pytest
 from clitools import assert_user_error, run_here
-from coursemaps import course_files, dead_url, serving
+from coursemaps import dead_url, serving
 from publicmaps import START_GOAL_FILES, START_GOAL_POINTS, far_apart_free_points
 
 from quadnav.batch.grid import parse_spec
@@ -32,14 +32,6 @@ from quadnav.world.courses import (
 SHIPPED = [entry for entry in catalogue().values() if entry.shipped is not None]
 FETCHED = [entry for entry in catalogue().values() if entry.shipped is None]
 SHIPPED_FOLDER = Path(__file__).resolve().parents[1] / "src/quadnav/world/coursemaps"
-
-
-@pytest.fixture
-def course_server(shared_maps) -> str:
-    """The base URL of a loopback server of ../shared/maps laid out as the downloads
-    expect (tests/coursemaps.py); skips without the corpus."""
-    with serving(course_files(shared_maps)) as url:
-        yield url
 
 
 @pytest.fixture
