@@ -8,7 +8,8 @@ its own array, slot 0 saying whether the commands were clipped. Use this file as
 template.
 
 Run: python examples/custom_controller.py [MAP]   (a map with its own start and goal, such as
-../shared/maps/meam620/test_window.json; default: the built-in forest)
+course:meam620/test_window, after quadnav maps fetch meam620/test_window; default: the
+built-in forest)
 """
 
 import sys

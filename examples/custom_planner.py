@@ -7,7 +7,8 @@ searches ``problem.free_world`` (the map with its blocks grown by the margin) fr
 short legs out of the margin. Use this file as a template.
 
 Run: python examples/custom_planner.py [MAP]   (a map with its own start and goal, such as
-../shared/maps/meam620/test_window.json; default: the built-in forest)
+course:meam620/test_window, after quadnav maps fetch meam620/test_window; default: the
+built-in forest)
 """
 
 import sys

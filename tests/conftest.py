@@ -72,6 +72,32 @@ def optional_shared_maps() -> Path | None:
     return SHARED_MAPS if SHARED_MAPS.is_dir() else None
 
 
+@pytest.fixture
+def course_server(shared_maps):
+    """The base URL of a loopback HTTP server of the public course maps, laid out as
+    ``quadnav maps fetch`` downloads them (tests/coursemaps.py); skips without the corpus."""
+    from coursemaps import course_files, serving
+
+    with serving(course_files(shared_maps)) as url:
+        yield url
+
+
+@pytest.fixture
+def fetched_course_maps(course_server, tmp_path, monkeypatch) -> Path:
+    """Every public course map fetched from ``course_server`` into an empty cache of this
+    test (``QUADNAV_CACHE_DIR``), so ``course:NAME`` reads them; returns the cache."""
+    from quadnav.world.courses import CACHE_ENV, URL_ENV, catalogue
+    from quadnav.world.download import fetch
+
+    cache = tmp_path / "course-cache"
+    monkeypatch.setenv(CACHE_ENV, str(cache))
+    monkeypatch.setenv(URL_ENV, course_server)
+    for entry in catalogue().values():
+        if entry.shipped is None:
+            fetch(entry)
+    return cache
+
+
 @pytest.fixture(scope="module")
 def client_ns():
     """The network namespace holding this process's djitellopy sockets (Tello tests)."""

@@ -46,9 +46,9 @@ def test_plan_and_fly(run_example):
 
 
 @pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
-def test_a_planner_of_ones_own_flies_a_course_map(run_example, shared_maps):
-    out = run_example("custom_planner.py", str(shared_maps / "meam620/test_window.json"))
-    assert out.startswith("test_window.json by PRM: success True"), out
+def test_a_planner_of_ones_own_flies_a_course_map(run_example, fetched_course_maps):
+    out = run_example("custom_planner.py", "course:meam620/test_window")
+    assert out.startswith("test_window by PRM: success True"), out
 
 
 def test_a_trajectory_method_of_ones_own_flies(run_example):
@@ -56,13 +56,13 @@ def test_a_trajectory_method_of_ones_own_flies(run_example):
     assert out.startswith("minimum jerk: success True"), out
 
 
-def test_a_reference_of_ones_own_is_tracked(run_example, shared_maps):
+def test_a_reference_of_ones_own_is_tracked(run_example):
     assert run_example("custom_reference.py").startswith("rose in open space: completed")
-    cube = str(shared_maps / "meam620/single_cube.txt")
-    out = run_example("custom_reference.py", cube, "1", "1", "3")
-    assert out.startswith("rose in single_cube.txt round (1.0, 1.0, 3.0): completed"), out
-    out = run_example("custom_reference.py", cube, "5", "4", "3")  # a petal through the cube
-    assert out.startswith("rose in single_cube.txt round (5.0, 4.0, 3.0): collision"), out
+    out = run_example("custom_reference.py", "course:rotorpy/pillar", "3", "3", "1.5")
+    assert out.startswith("rose in pillar round (3.0, 3.0, 1.5): completed"), out
+    # a petal through the pillar (x -1 .. -0.75, y -0.125 .. 0.125)
+    out = run_example("custom_reference.py", "course:rotorpy/pillar", "-0.4", "-0.85", "1.5")
+    assert out.startswith("rose in pillar round (-0.4, -0.85, 1.5): collision"), out
 
 
 def test_a_batch_study(run_example, tmp_path):
@@ -72,8 +72,8 @@ def test_a_batch_study(run_example, tmp_path):
 
 @pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
 def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offset(
-        run_example, shared_maps):
-    lines = run_example("custom_controller.py", str(shared_maps / "meam620/test_window.json"))
+        run_example, fetched_course_maps):
+    lines = run_example("custom_controller.py", "course:meam620/test_window")
     plain, integral = (float(line.split("final error ")[1].split(" cm")[0])
                        for line in lines.splitlines())
     assert all("success True" in line for line in lines.splitlines()), lines

@@ -34,7 +34,7 @@ from typing import Any
 
 from quadnav.config import read_toml
 from quadnav.control.gains import course_gain_names
-from quadnav.errors import QuadnavError
+from quadnav.errors import MapError, QuadnavError
 from quadnav.limits import (
     ACCELERATION,
     COORDINATE,
@@ -57,6 +57,7 @@ from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
 from quadnav.world import read_start_goal
 from quadnav.world.builtin import is_builtin_spec
+from quadnav.world.courses import MAP, is_course_name, read_course_file
 
 #: Wall-time cap of one mission's search, s: high enough that the sample budget
 #: (``improve``) ends every search in practice, so a mission's row depends on its seed alone.
@@ -117,7 +118,7 @@ class MapEntry:
     """One map of the grid with its query.
 
     Attributes:
-        map: a map file (resolved path) or a built-in world spec.
+        map: a map file (resolved path), a built-in world spec or a course map (``course:NAME``).
         start: (x, y, z) m, or None: the map's own, else drawn from each mission's seed.
         goal: likewise.
         margin: m, or None: the batch's ``margin``, else the map's own, else 0.2.
@@ -376,10 +377,18 @@ def _gains(value: Any, folder: Path, src: _Source) -> str:
 
 
 def _map_name(value: Any, folder: Path, key: str, src: _Source) -> str:
-    """A map file (resolved) or a built-in world spec."""
+    """A map file (resolved), a built-in world spec, or a course map (``course:NAME``,
+    shipped or fetched: checked here, before any mission flies)."""
+    if isinstance(value, str) and is_course_name(value) and not (folder / value).is_file():
+        try:
+            read_course_file(value, MAP)
+        except MapError as error:
+            raise src.error(key, str(error)) from None
+        return value
     if isinstance(value, str) and is_builtin_spec(value) and not (folder / value).is_file():
         return value
-    return _file(value, folder, key, "a map file or a built-in world spec", src)
+    return _file(value, folder, key, "a map file, a built-in world spec or a course map "
+                 "(course:NAME)", src)
 
 
 def _map_entry(item: Any, folder: Path, src: _Source) -> MapEntry:
@@ -393,8 +402,8 @@ def _map_entry(item: Any, folder: Path, src: _Source) -> MapEntry:
         raise src.error("maps", f"a map entry needs a map: {item!r}")
     start = goal = None
     if "start_goal" in item:
-        start, goal = (tuple(float(v) for v in point) for point in read_start_goal(
-            _file(item["start_goal"], folder, "start_goal", "a start/goal file", src)))
+        start, goal = (tuple(float(v) for v in point) for point in
+                       _start_goal(item["start_goal"], folder, src))
     if "start" in item:
         start = _point(item["start"], "start", src)
     if "goal" in item:
@@ -402,6 +411,17 @@ def _map_entry(item: Any, folder: Path, src: _Source) -> MapEntry:
     margin = item.get("margin")
     return MapEntry(_map_name(item["map"], folder, "map", src), start, goal,
                     None if margin is None else _number(margin, MARGIN, "margin", src))
+
+
+def _start_goal(value: Any, folder: Path, src: _Source) -> tuple:
+    """(start, goal) from a start/goal file (resolved) or a course one (``course:NAME``)."""
+    if isinstance(value, str) and is_course_name(value) and not (folder / value).is_file():
+        try:
+            return read_start_goal(value)
+        except MapError as error:
+            raise src.error("start_goal", str(error)) from None
+    return read_start_goal(_file(value, folder, "start_goal", "a start/goal file or a course "
+                                 "one (course:NAME)", src))
 
 
 def _choice(value: Any, choices: tuple[str, ...], key: str, src: _Source) -> str:

@@ -31,6 +31,7 @@ from quadnav.files import atomic_output
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
 from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
 from quadnav.world.builtin import is_builtin_spec
+from quadnav.world.courses import is_course_name
 
 SUMMARY_HTML = "summary.html"
 #: Figure resolution, dots per inch, and the widths of the figures, inches (shown about
@@ -54,11 +55,16 @@ HORIZONTAL = ({"orientation": "horizontal"}
 
 def short_maps(names: Sequence[str]) -> dict[str, str]:
     """Short labels of map names: files relative to the folder they share, built-in world
-    specs as they are."""
-    files = [name for name in names if not is_builtin_spec(name)]
+    specs and course maps as they are."""
+    files = [name for name in names if not _is_named(name)]
     common = os.path.commonpath([os.path.dirname(name) for name in files]) if files else ""
-    return {name: name if is_builtin_spec(name) or not common
+    return {name: name if _is_named(name) or not common
             else os.path.relpath(name, common) for name in names}
+
+
+def _is_named(name: str) -> bool:
+    """Whether a map name is a built-in world spec or a course map, not a file."""
+    return is_builtin_spec(name) or is_course_name(name)
 
 
 def _speed(value: float | None) -> str:

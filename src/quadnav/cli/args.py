@@ -84,8 +84,10 @@ def speed_or_max(text: str) -> float | None:
 
 
 def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
-    """MAP: a map file or a built-in world spec (optional: defaults to the built-in world)."""
-    help_text = "map file (.txt or .json) or built-in world spec, e.g. forest:seed=3"
+    """MAP: a map file, a built-in world spec or a course map (optional: defaults to the
+    built-in world)."""
+    help_text = ("map file (.txt or .json), built-in world spec (e.g. forest:seed=3) or "
+                 "course map (e.g. course:rbe595/map1; quadnav maps list)")
     if optional:
         parser.add_argument("map", nargs="?", default=DEFAULT_WORLD_SPEC, metavar="MAP",
                             help=f"{help_text} (default: {DEFAULT_WORLD_SPEC})")
@@ -111,7 +113,8 @@ def add_start_goal_arguments(parser: argparse.ArgumentParser, file: bool = True)
     if file:
         parser.add_argument("--start-goal", metavar="FILE",
                             help="RBE595 start/goal file with lines 'start: (x, y, z)', "
-                                 "'goal: (x, y, z)'")
+                                 "'goal: (x, y, z)', or a course one (e.g. "
+                                 "course:rbe595/p2b_startandgoal_map1)")
 
 
 def resolve_margin(args: argparse.Namespace, world: World) -> float:

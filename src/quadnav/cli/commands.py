@@ -20,11 +20,13 @@ class Command:
         module: its module under :mod:`quadnav.cli`.
         register: the name of that module's function ``register(subparsers)``.
         help: the one-line help ``quadnav --help`` lists.
+        aliases: other names that run it (``maps`` for ``map``).
     """
 
     module: str
     register: str
     help: str
+    aliases: tuple[str, ...] = ()
 
 
 #: Every top-level command, in the order ``quadnav --help`` lists them.
@@ -43,7 +45,9 @@ COMMANDS: dict[str, Command] = {
                        "animate a flight from a quadnav fly or track output folder (GIF or MP4)"),
     "blender": Command("blender_command", "add_blender_command",
                        "a run folder as a Blender scene (.blend), with optional renders"),
-    "map": Command("map_commands", "add_map_commands", "inspect, check, draw and convert maps"),
+    "map": Command("map_commands", "add_map_commands",
+                   "inspect, check, draw and convert maps; list and fetch the public course "
+                   "maps", aliases=("maps",)),
     "plan": Command("plan_command", "add_plan_command",
                     "plan a collision-free path (RRT* or OMPL)"),
     "report": Command("report_command", "add_report_command",
@@ -72,6 +76,7 @@ def command_help(name: str) -> str:
 def command_in(argv: Sequence[str]) -> str | None:
     """The command the command line ``argv`` runs: its first word that is not an option
     (the top level has only ``--help`` and ``--version``, which take no value), if that
-    names a command; None when it does not."""
+    names a command or one of its aliases; None when it does not."""
     word = next((word for word in argv if not word.startswith("-")), None)
-    return word if word in COMMANDS else None
+    return next((name for name, command in COMMANDS.items()
+                 if word == name or word in command.aliases), None)

@@ -42,6 +42,7 @@ from tqdm import tqdm
 
 from quadnav.arrays import FloatArray
 from quadnav.cli.args import (
+    add_map_argument,
     add_margin_argument,
     add_start_goal_arguments,
     coordinate,
@@ -470,8 +471,7 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                     "--fly also flies the plan closed loop (its states as the reference, "
                     "then a straight stop) on the simulated vehicle, as quadnav fly "
                     "flies a trajectory, and writes that run folder to DIR/flight.")
-    p.add_argument("map", metavar="MAP",
-                   help="map file (.txt or .json) or built-in world spec, e.g. forest:seed=3")
+    add_map_argument(p)
     add_start_goal_arguments(p, file=False)
     add_margin_argument(p)
     _add_search_arguments(p)

@@ -45,7 +45,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
             module = importlib.import_module(f"quadnav.cli.{command.module}")
             getattr(module, command.register)(commands)
         else:
-            commands.add_parser(name, help=command.help)
+            commands.add_parser(name, help=command.help, aliases=command.aliases)
     return parser
 
 

@@ -1,4 +1,4 @@
-"""``quadnav map info|check|show|convert``."""
+"""``quadnav map info|check|show|convert|list|fetch`` (``maps`` is another name for ``map``)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from quadnav.cli.args import (
     resolve_margin,
     resolve_start_goal,
 )
-from quadnav.cli.commands import command_help
+from quadnav.cli.commands import COMMANDS, command_help
+from quadnav.cli.course_commands import add_course_commands
 from quadnav.errors import QuadnavError
 from quadnav.limits import PLAN_TIME
 from quadnav.planning import PlannerSettings, make_problem
@@ -109,9 +110,13 @@ def convert(args: argparse.Namespace) -> int:
 
 
 def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
-    """Register ``quadnav map ...`` on the top-level subparsers."""
+    """Register ``quadnav map ...`` (and its other name ``maps``) on the top-level
+    subparsers."""
     parser = subparsers.add_parser("map", help=command_help("map"),
-                                   description="Inspect, check, draw and convert maps.")
+                                   aliases=COMMANDS["map"].aliases,
+                                   description="Inspect, check, draw and convert maps; list "
+                                               "and fetch the public course maps. 'quadnav "
+                                               "maps' is another name for 'quadnav map'.")
     commands = parser.add_subparsers(dest="map_command", metavar="COMMAND", required=True)
 
     p = commands.add_parser("info", help="bounds, block count, free volume, start/goal",
@@ -149,8 +154,11 @@ def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
     p = commands.add_parser("convert", help="text <-> JSON",
                             description="Convert a map between the text and JSON formats; the "
                                         "output's extension picks the format (.json or "
-                                        ".txt). IN may be a built-in world spec.")
-    p.add_argument("input", metavar="IN", help="map file or built-in world spec")
+                                        ".txt). IN may be a built-in world spec or a "
+                                        "course map.")
+    p.add_argument("input", metavar="IN", help="map file, built-in world spec or course map")
     p.add_argument("output", metavar="OUT", help="file to write (.json or .txt)")
     p.set_defaults(handler=convert)
+
+    add_course_commands(commands)
 

@@ -1,7 +1,8 @@
 """Reading and writing map files, and resolving a MAP argument to a :class:`World`.
 
-A MAP is a path to a text or JSON map file, or the spec of a built-in world such as
-``forest:size=50x50x8,density=0.05,seed=3`` (see :mod:`quadnav.world.builtin`).
+A MAP is a path to a text or JSON map file, the spec of a built-in world such as
+``forest:size=50x50x8,density=0.05,seed=3`` (see :mod:`quadnav.world.builtin`), or a public
+course map such as ``course:rbe595/map1`` (see :mod:`quadnav.world.courses`).
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from pathlib import Path
 
 from quadnav.errors import MapError
 from quadnav.files import atomic_output
-from quadnav.world import builtin
+from quadnav.world import builtin, courses
 from quadnav.world.jsonmap import format_json_map, parse_json_map
 from quadnav.world.model import World
 from quadnav.world.reading import decode_text, read_file
@@ -23,10 +24,12 @@ def _is_json(path: Path, text: str) -> bool:
     return path.suffix.lower() != ".txt" and text.lstrip().startswith("{")
 
 
-def parse_map(data: bytes, source: str) -> World:
-    """A World from the bytes of a map file in either format (JSON starts with ``{``)."""
+def parse_map(data: bytes, source: str, file_name: str | None = None) -> World:
+    """A World named ``source`` from the bytes of a map file in either format: JSON if the
+    file's name (``file_name``, default ``source``) ends in ``.json``, text if it ends in
+    ``.txt``, else JSON if it starts with ``{``."""
     text = decode_text(data, source)
-    if _is_json(Path(source), text):
+    if _is_json(Path(file_name or source), text):
         return parse_json_map(text, source)
     return parse_text_map(text, source)
 
@@ -37,7 +40,8 @@ def read_map(path: str | Path) -> World:
 
 
 def load_world(source: str | Path | World) -> World:
-    """A World from a map file path, a built-in world spec, or a World (returned as is)."""
+    """A World from a map file path, a built-in world spec, a ``course:NAME`` course map
+    (offline: shipped, or fetched before), or a World (returned as is)."""
     if isinstance(source, World):
         return source
     try:
@@ -46,10 +50,14 @@ def load_world(source: str | Path | World) -> World:
         is_file = False
     if is_file:
         return read_map(source)
+    if courses.is_course_name(source):
+        data, entry = courses.read_course_file(str(source), courses.MAP)
+        return parse_map(data, str(source), entry.file_name)
     if builtin.is_builtin_spec(str(source)):
         return builtin.build_world(str(source))
     raise MapError(str(source), "no such map file, and not a built-in world "
-                   f"(built-in: {', '.join(builtin.world_names())})")
+                   f"(built-in: {', '.join(builtin.world_names())}) or a course map "
+                   "(course:NAME: quadnav maps list)")
 
 
 def format_map(world: World, path: str | Path) -> str:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import MapError
+from quadnav.world import courses
 from quadnav.world.reading import (
     check_coordinates,
     check_line_length,
@@ -51,5 +52,10 @@ def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_start_goal(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """(start, goal), each (3,) metres, from an RBE595 start/goal file."""
-    return parse_start_goal(decode_text(read_file(path), str(path)), str(path))
+    """(start, goal), each (3,) metres, from an RBE595 start/goal file or a course one
+    named ``course:NAME`` (offline: fetched before)."""
+    if courses.is_course_name(path):
+        data, _ = courses.read_course_file(str(path), courses.START_GOAL)
+    else:
+        data = read_file(path)
+    return parse_start_goal(decode_text(data, str(path)), str(path))
