@@ -30,3 +30,7 @@ def test_every_course_gain_table_and_vendored_library_is_in_the_notices():
         assert "as published in" in table.read_text() or "Recovered from" in table.read_text()
     assert (PACKAGE / "viz/viewer/three/LICENSE").read_text().startswith("The MIT License")
     assert "three.js" in notices and "src/quadnav/viz/viewer/three/" in notices
+    rotorpy = PACKAGE / "world/coursemaps/rotorpy"
+    assert "Copyright 2023 RotorPy Authors" in (rotorpy / "LICENSE.md").read_text()
+    for world in sorted(rotorpy.glob("*.json")):
+        assert world.name in notices, world.name
