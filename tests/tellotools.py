@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from quadnav.hardware.bridge import BridgeSettings, Outcome, fly
+from quadnav.hardware.bridge import BridgeSettings, Flown, fly
 from quadnav.hardware.flight_plan import FlightPlan, plan_flight
 from quadnav.hardware.netns import unavailable_reason
 from quadnav.planning import PlannerSettings
@@ -56,19 +56,23 @@ def planned_room() -> FlightPlan:
 
 
 def emulated_flight(plan: FlightPlan, client_ns, folder, mode="waypoints", scale=10.0,
-                    **emulator) -> tuple[Outcome, np.ndarray, object]:
-    """Fly ``plan`` on an emulator standing under its start; returns the outcome, the
-    dead-reckoned track and the emulator (stopped) once the drone has come to rest."""
+                    **emulator) -> tuple[Flown, object]:
+    """Fly ``plan`` on an emulator standing under its start, which writes its true track to
+    a file beside ``folder`` for the bridge to read after the flight; returns what the
+    bridge flew (its outcome, dead-reckoned track and the true track) and the emulator
+    (stopped) once the drone has come to rest."""
     from quadnav.hardware.emulator import TelloEmulator
 
+    folder = Path(folder)
+    truth = folder.with_name(f"{folder.name}-emulator-truth.csv")
     with TelloEmulator(start=tuple(plan.takeoff_ground), time_scale=scale,
-                       client_netns=client_ns, **emulator) as drone:
-        outcome, track = fly(plan, BridgeSettings(mode=mode, time_scale=scale), folder,
-                             host=drone.host, truth=lambda: drone.track()[1])
+                       client_netns=client_ns, truth=truth, **emulator) as drone:
+        flown = fly(plan, BridgeSettings(mode=mode, time_scale=scale), folder,
+                    host=drone.host, truth=truth)
         deadline = time.monotonic() + 5.0
         while drone.flying() and time.monotonic() < deadline:  # e.g. landing by itself
             time.sleep(0.02)
-    return outcome, track, drone
+    return flown, drone
 
 
 def assert_kept_the_fence(plan: FlightPlan, positions: np.ndarray) -> None:

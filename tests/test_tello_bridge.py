@@ -30,12 +30,27 @@ from tellotools import (
     planned_room,
 )
 
-from quadnav.cli.tello_fly_command import ipv4, percent, tello_speed
+from quadnav.cli.tello_fly_command import exit_code, ipv4, percent, tello_speed
 from quadnav.hardware import sdk
 from quadnav.hardware.arc import Arc
-from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, Status, fly
+from quadnav.hardware.bridge import (
+    GOAL_TOLERANCE,
+    LANDING_TOLERANCE,
+    BridgeSettings,
+    Status,
+    fly,
+    landed,
+)
 from quadnav.hardware.curves import TOLERANCE_CM, Curve
-from quadnav.hardware.dead_reckoning import DeadReckoning, clip_step
+from quadnav.hardware.dead_reckoning import (
+    HALF_UNIT,
+    MOVE_VARIANCE,
+    DeadReckoning,
+    Estimate,
+    clip_step,
+    step_bound,
+    step_slack,
+)
 from quadnav.hardware.flight_plan import (
     TAKEOFF_HEIGHT,
     TRACKING_ALLOWANCE,
@@ -66,6 +81,7 @@ from quadnav.runs import read_run
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.sampled import read_reference_file
 from quadnav.world import World, load_world
+from quadnav.world.placement import format_point
 
 ALWAYS = lambda start, end, segments: True  # noqa: E731  (a geofence that allows all)
 
@@ -241,8 +257,8 @@ def test_tracking_velocity_corrects_towards_the_reference_and_is_capped():
 
 def test_dead_reckoning_keeps_within_what_the_reports_allow():
     # A step asked for is kept when the reports allow it, else clipped to them.
-    assert np.allclose(clip_step([0.46, 0.0, 0.0], [0.5, 0.0, 0.0], 1.0), [0.46, 0, 0])
-    assert np.allclose(clip_step([0.30, 0.0, 0.0], [0.5, 0.0, 0.0], 1.0), [0.45, 0, 0])
+    assert np.allclose(clip_step([0.46, 0.0, 0.0], [0.5, 0.0, 0.0], 0.05), [0.46, 0, 0])
+    assert np.allclose(clip_step([0.30, 0.0, 0.0], [0.5, 0.0, 0.0], 0.05), [0.45, 0, 0])
     estimate = DeadReckoning(TakeoffFrame.under([1.0, 2.0, 0.0], math.pi / 2))
     state = {"mid": -2, "x": -200, "y": -200, "z": -200, "yaw": 0, "vgx": 0, "vgy": 0,
              "vgz": 0, "h": 80}
@@ -252,6 +268,81 @@ def test_dead_reckoning_keeps_within_what_the_reports_allow():
     assert np.allclose(estimate.position(), [1.2, 2.5, 0.9])  # forward is +y on the map
     estimate.update({"bat": 50})  # not a full packet: ignored
     assert len(estimate.track()) == 2
+
+
+class ReplayClock:
+    """A wall clock that stands still until moved on (replays packets at chosen times)."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+HOVER = {"mid": -2, "x": -200, "y": -200, "z": -200, "yaw": 0, "vgx": 0, "vgy": 0,
+         "vgz": 0, "h": 80}
+
+
+def replay(estimate: DeadReckoning, clock: ReplayClock, speeds, dt: float = 1.0) -> None:
+    """Packets every ``dt`` s reporting forward speeds ``speeds`` (whole dm/s)."""
+    for vgx in speeds:
+        clock.now += dt
+        estimate.update({**HOVER, "vgx": vgx})
+
+
+def test_the_uncertainty_grows_with_each_step_by_what_the_reports_allow():
+    clock = ReplayClock()
+    estimate = DeadReckoning(TakeoffFrame.under([0.0, 0.0, 0.0], 0.0), clock=clock)
+    estimate.update({**HOVER, "vgx": 5})
+    assert estimate.estimate().sigma == 0.0
+    replay(estimate, clock, [5, 5, 5, 5], dt=0.5)  # four steps at a steady 0.5 m/s ...
+    steady = 4 * 2 * (HALF_UNIT * 0.5) ** 2 / 3  # ... each within half a unit on x and y
+    assert np.allclose(estimate.position(), [1.0, 0, 0.8])
+    assert estimate.estimate().sigma == pytest.approx(math.sqrt(steady))
+    clock.now += 0.5
+    estimate.update(HOVER)  # stopped: the change may have come anywhere in the step
+    slack = step_slack([0.5, 0, 0], [0, 0, 0], 0.5)
+    assert slack[0] == pytest.approx((HALF_UNIT + 0.25) * 0.5)
+    assert np.allclose(estimate.position(), [1.125, 0, 0.8])
+    assert estimate.estimate().sigma == pytest.approx(
+        math.sqrt(steady + np.sum(slack[:2] ** 2) / 3))
+
+
+@pytest.mark.parametrize(("speeds", "dt", "moved"), [
+    ([2, 4, 3, 0], 1.0, 1.0),  # reckoned 0.9 m, and the reports allow the move's 1 m: taken
+    ([0, 0, 0], 1.0, 1.0),  # a second between packets: a whole move may hide between them
+    ([0] * 20, 0.1, 20 * step_bound(0.1) + step_bound(0.05)),  # it never moved: as far as
+])                                                               # the reports allow
+def test_a_move_answered_ok_is_taken_in_within_what_the_reports_allow(speeds, dt, moved):
+    clock = ReplayClock()
+    estimate = DeadReckoning(TakeoffFrame.under([1.0, 2.0, 0.0], math.pi / 2), clock=clock)
+    estimate.update(HOVER)
+    estimate.begin_move([1.0, 0.0, 0.0])  # go 100 0 0 ...: forward, +y on the map
+    replay(estimate, clock, speeds, dt)
+    assert estimate.position()[1] - 2.0 == pytest.approx(0.1 * sum(speeds) * dt)
+    clock.now += dt / 2
+    estimate.end_move()  # the ok, half a step after the last packet
+    assert moved <= 1.0 and np.allclose(estimate.position(), [1.0, 2.0 + moved, 0.8])
+    # the move's end is known to its accuracy, or to the reports' if they say more
+    velocities = [0.0, *(0.1 * v for v in speeds), 0.0]  # at the ok: stopped
+    seconds = [dt] * len(speeds) + [dt / 2]
+    steps = sum(np.sum(step_slack([a, 0, 0], [b, 0, 0], t)[:2] ** 2) / 3
+                for a, b, t in zip(velocities, velocities[1:], seconds, strict=False))
+    assert estimate.estimate().sigma == pytest.approx(math.sqrt(min(steps, MOVE_VARIANCE)))
+
+
+@pytest.mark.parametrize(("off", "status", "code"), [(0.05, Status.LANDED, 0),
+                                                    (0.15, Status.OFF_GOAL, 1)])
+def test_the_verdict_is_the_dead_reckoned_landing_within_the_tolerance(off, status, code):
+    plan = planned_room()
+    place = Estimate(plan.landing_ground + np.array([0.0, off, 0.0]), 0.04)
+    outcome = landed(plan, "1 go moves", place)
+    assert outcome.status is status and exit_code(outcome) == code
+    assert outcome.landing is place  # one place: what the message says, the metrics hold
+    assert outcome.message.startswith(
+        f"landed at {format_point(place.point)} +- 0.04 m, {off:.2f} m from the goal")
+    assert (f"beyond its {LANDING_TOLERANCE:g} m tolerance" in outcome.message) == bool(code)
 
 
 # --- the plan ----------------------------------------------------------------------------
@@ -401,7 +492,8 @@ def test_curves_follow_the_trajectory_within_the_tolerance_inside_the_fence():
 def test_rc_dry_run_streams_sticks_at_20_hz_within_the_lost_link_bound(course, tmp_path):
     *_, plan = course
     out = io.StringIO()
-    outcome, track = fly(plan, BridgeSettings(mode="rc"), tmp_path, stream=out)
+    flown = fly(plan, BridgeSettings(mode="rc"), tmp_path, stream=out)
+    outcome, track = flown.outcome, flown.track
     assert outcome.status is Status.DRY_RUN and len(track) == 0
     lines = out.getvalue().splitlines()
     sticks = np.array([[int(v) for v in line.split()[1:]] for line in lines[2:-1]])
@@ -457,7 +549,8 @@ def test_whole_mission_on_the_emulator(request, client_ns, tmp_path, mode):
         scale = 10.0
     else:
         plan, scale = planned_room(), 5.0
-    outcome, track, drone = emulated_flight(plan, client_ns, tmp_path, mode, scale)
+    flown, drone = emulated_flight(plan, client_ns, tmp_path, mode, scale)
+    outcome, track = flown.outcome, flown.track
     assert outcome.status is Status.LANDED, outcome.message
     _, positions = drone.track()
     assert_kept_the_fence(plan, positions)

@@ -363,14 +363,17 @@ def test_battery_running_low_in_flight_lands(emulate):
 
 
 @needs_netns
-def test_cli_emulate_serves_djitellopy_until_ctrl_c(client_ns):
-    host = "198.18.68.1"
+def test_cli_emulate_serves_djitellopy_until_ctrl_c(client_ns, tmp_path):
+    host, truth = "198.18.68.1", tmp_path / "truth.csv"
+    began = time.time()
     process = client_ns.call(lambda: subprocess.Popen(
-        [*QUADNAV, "tello", "emulate", "--host", host, "--start", "1", "2", "0", "--yaw", "90"],
+        [*QUADNAV, "tello", "emulate", "--host", host, "--start", "1", "2", "0", "--yaw", "90",
+         "--truth", str(truth)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True))
     try:
         banner = process.stdout.readline()
         assert f"Emulated Tello at {host}" in banner, process.stderr.read()
+        assert f"its true track written to {truth}" in banner
         tello = Tello(host=host)
         tello.connect()
         assert tello.query_battery() == 100 and tello.get_yaw() == 0
@@ -382,6 +385,17 @@ def test_cli_emulate_serves_djitellopy_until_ctrl_c(client_ns):
     links = client_ns.call(lambda: subprocess.run(["ip", "-br", "link"], capture_output=True,
                                                   text=True)).stdout
     assert "qtc6124401" not in links  # the link went with the emulator
+    # the true track: UNIX time and world position, the drone on the floor at its start
+    lines = truth.read_text().splitlines()
+    assert lines[0] == "unix_time_s,x,y,z" and len(lines) > 10
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    assert began < rows[0, 0] and np.all(np.diff(rows[:, 0]) > 0) and rows[-1, 0] < time.time()
+    assert np.allclose(rows[:, 1:], [1, 2, 0])
+
+
+def test_cli_emulate_refuses_a_true_track_it_cannot_write(tmp_path):
+    assert_user_error(run("tello", "emulate", "--truth", tmp_path / "no" / "truth.csv"),
+                      f"{tmp_path / 'no' / 'truth.csv'}: cannot write the true track")
 
 
 def test_cli_emulate_rejects_a_loopback_host():

@@ -48,7 +48,7 @@ def planned(start: tuple, goal: tuple = GOAL, yaw: float = 0.0) -> FlightPlan:
 def dry_run(plan: FlightPlan, mode: str, tmp_path) -> tuple[list[str], str]:
     """The commands a dry run prints, and its outcome's message."""
     out = io.StringIO()
-    outcome, _ = fly(plan, BridgeSettings(mode=mode), tmp_path, stream=out)
+    outcome = fly(plan, BridgeSettings(mode=mode), tmp_path, stream=out).outcome
     assert outcome.status is Status.DRY_RUN, outcome.message
     return out.getvalue().splitlines(), outcome.message
 
@@ -168,7 +168,8 @@ def test_a_takeoff_beside_a_block_is_still_refused():
 @needs_netns
 def test_emulated_mission_from_a_pocket_lands_at_the_goal(client_ns, tmp_path):
     plan = planned(IN_THE_POCKET)
-    outcome, _, drone = emulated_flight(plan, client_ns, tmp_path)
+    flown, drone = emulated_flight(plan, client_ns, tmp_path)
+    outcome = flown.outcome
     assert outcome.status is Status.LANDED, outcome.message
     assert_on_the_floor(drone, GOAL)
     _, positions = drone.track()

@@ -290,3 +290,58 @@ def test_a_block_in_front_hides_what_is_behind_it(browser, pillar):
         else:
             assert blue > 100 and red < 60, (red, green, blue)  # the block's blue
     assert _errors(browser) == []
+
+
+@pytest.fixture(scope="module")
+def tello_truth(tmp_path_factory):
+    """The view page of a Tello run along the room (:func:`tellotools.planned_room`),
+    written as ``tello fly`` writes it: the dead-reckoned track along y = 1 m, and the
+    true track 0.4 m beside it."""
+    from tellotools import planned_room
+
+    from quadnav.hardware.bridge import BridgeSettings, Flown, Outcome, Status
+    from quadnav.hardware.dead_reckoning import Estimate
+    from quadnav.hardware.run_record import tello_run_content
+
+    t, x = np.linspace(0.0, 10.0, 21), np.linspace(0.5, 3.5, 21)
+    track = np.column_stack([t, x, np.full(21, 1.0), np.full(21, 0.8)])
+    truth = np.column_stack([t, x, np.full(21, 1.4), np.full(21, 0.8)])
+    landing = Estimate(np.array([3.5, 1.0, 0.0]), 0.05)
+    flown = Flown(Outcome(Status.LANDED, "landed", landing=landing), track, truth)
+    folder = tmp_path_factory.mktemp("tello_truth")
+    write_run(tello_run_content(planned_room(), BridgeSettings(), flown, "198.18.67.1"),
+              folder, figures=False, html=True)
+    return folder / VIEW_PAGE
+
+
+def test_a_tello_runs_true_track_is_drawn_beside_its_estimate(browser, tello_truth):
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    _open(browser, tello_truth)
+    labels = browser.find_element("id", "layers").text
+    assert "flown track" in labels and "true track" in labels
+    frames = browser.execute_script("return Number(document.getElementById('view')"
+                                    ".dataset.frames)")
+    browser.execute_script("quadnavViewer.setView(-90, 80)")  # nearly from above
+    WebDriverWait(browser, 5, poll_frequency=0.05).until(
+        lambda d: d.execute_script(
+            "return Number(document.getElementById('view').dataset.frames)") > frames)
+    on_truth = (2.0, 1.4, 0.8)  # halfway along, where nothing else is drawn
+    assert _purple_near(browser, on_truth)  # the true track's
+    before = _canvas_png(browser)
+    browser.find_element("xpath", "//div[@id='layers']/label[contains(., 'true track')]"
+                                  "/input").click()
+    _redrawn(browser, before)
+    assert not _purple_near(browser, on_truth)  # hidden with its layer
+    assert _errors(browser) == []
+
+
+def _purple_near(driver, point, reach: int = 3) -> bool:
+    """Whether a pixel within ``reach`` px of the screen position of ``point`` (3,), m, is
+    purple (the true track's #9467bd, blended with white at its edges: red and blue well
+    above green, unlike the tree's blue, the path's red or the floor's grey)."""
+    x, y = driver.execute_script("return quadnavViewer.screenOf(arguments[0])", list(point))
+    image = Image.open(io.BytesIO(_canvas_png(driver))).convert("RGB")
+    pixels = [image.getpixel((round(x) + dx, round(y) + dy))
+              for dx in range(-reach, reach + 1) for dy in range(-reach, reach + 1)]
+    return any(red > green + 20 and blue > green + 40 for red, green, blue in pixels)

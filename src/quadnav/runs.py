@@ -15,6 +15,8 @@ Files (every number SI, world frame z up):
 ``path.csv``       the refined path, ``x,y,z`` per vertex (fly, only with a path)
 ``trajectory.csv`` the reference every 10 ms (only with a flight)
 ``flight.csv``     the flight record (only with a flight)
+``truth.csv``      the true track, ``t,x,y,z`` in flight.csv's time (a Tello flight
+                   whose true track was known: against the emulator)
 ``*.png``          figures (unless skipped; only the 3D view without a flight)
 ``report.html``    the run report (:mod:`quadnav.report.html_report`, unless skipped)
 ================== ============================================================
@@ -25,6 +27,7 @@ from :func:`read_run`, so they work on any folder a run left, long after the run
 
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,16 +51,21 @@ from quadnav.world.mapfile import format_map
 TRAJECTORY_DT = 0.01
 #: Figures a run writes, in the order the report shows them.
 FIGURES = ("flight_3d.png", "flight_states.png", "tracking_error.png", "attitude_motors.png")
+#: The figure of a real drone's run with a true track: the estimate's drift from it.
+DRIFT_FIGURE = "drift.png"
 #: The HTML report written with the figures (:mod:`.html_report`).
 REPORT = "report.html"
 #: The interactive page written on request (:mod:`quadnav.viz.html_viewer`).
 VIEW_PAGE = "view.html"
-#: Files written only when there was a flight (path.csv: by fly only).
-FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv")
+#: Files written only when there was a flight (path.csv: by fly only; truth.csv: by a
+#: Tello flight whose true track was known).
+FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv", "truth.csv")
 #: Every file a run folder can hold.
 RUN_FILES = ("metrics.json", "parameters.json", "map.json", "tree.csv", *FLIGHT_FILES,
-             *FIGURES, REPORT, VIEW_PAGE)
+             *FIGURES, DRIFT_FIGURE, REPORT, VIEW_PAGE)
 TREE_HEADER = "x,y,z,parent"
+#: truth.csv: flight.csv's time, s, and the true position, m.
+TRUTH_HEADER = "t,x,y,z"
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,6 +98,8 @@ class RunContent:
         path: (M, 3) the refined path, m, or None.
         reference: what was flown, or None without a flight.
         flight: the flight (simulated, or a real one's :class:`FlightTable`), or None.
+        truth: (K, 4) the true track of a real one's flight (t s as the flight's, x, y,
+            z m), or None when not known.
     """
 
     world: World
@@ -99,6 +109,7 @@ class RunContent:
     path: FloatArray | None
     reference: Reference | None
     flight: Flight | FlightTable | None
+    truth: FloatArray | None = None
 
 
 def run_content(run: Mission | Tracking) -> RunContent:
@@ -132,6 +143,8 @@ def write_run_files(content: RunContent, folder: Path) -> list[str]:
         flight = content.flight
         texts["flight.csv"] = (flight_csv(flight) if isinstance(flight, Flight)
                                else flight.csv())
+        if content.truth is not None:
+            texts["truth.csv"] = csv_table(content.truth, TRUTH_HEADER)
     for name, text in texts.items():
         (folder / name).write_text(text, encoding="utf-8")
     return list(texts)
@@ -166,6 +179,7 @@ class Run:
         path: (M, 3) refined path, or None without a path (and for a track).
         trajectory: the reference, or None.
         flight: the flight record, or None.
+        truth: (K, 4) the true track (t s, x, y, z m; see :class:`RunContent`), or None.
     """
 
     folder: Path
@@ -177,6 +191,7 @@ class Run:
     path: FloatArray | None
     trajectory: Samples | None
     flight: FlightTable | None
+    truth: FloatArray | None = None
 
     def tree_edges(self) -> FloatArray:
         """(E, 2, 3) segments from each non-root vertex to its parent."""
@@ -199,10 +214,11 @@ class Run:
         return self.metrics["reference"] if self.is_track else self.metrics["map"]
 
 
-def _table(path: Path, header: str) -> np.ndarray:
-    """The numbers of a CSV file whose first line must be ``header``."""
+def read_table(path: Path, header: str, text: str | None = None) -> np.ndarray:
+    """The numbers of the CSV file ``path`` (or of its ``text``, already read) whose first
+    line must be ``header``; QuadnavError naming the file if not."""
     try:
-        with path.open(encoding="utf-8") as file:
+        with io.StringIO(text) if text is not None else path.open(encoding="utf-8") as file:
             first = file.readline().strip()
             if first != header:
                 raise QuadnavError(f"{path}:1: expected the header {header!r}, got {first!r}")
@@ -235,16 +251,26 @@ def read_run(folder: str | Path) -> Run:
         raise QuadnavError(f"{folder}: not a quadnav fly or track output folder (no "
                            "metrics.json); run quadnav fly -o DIR or quadnav track REF -o DIR "
                            "first")
-    tree = (_table(folder / "tree.csv", TREE_HEADER) if (folder / "tree.csv").is_file()
+    tree = (read_table(folder / "tree.csv", TREE_HEADER) if (folder / "tree.csv").is_file()
             else np.zeros((0, 4)))
-    path = _table(folder / "path.csv", "x,y,z") if (folder / "path.csv").is_file() else None
-    trajectory = flight = None
+    path = read_table(folder / "path.csv", "x,y,z") if (folder / "path.csv").is_file() else None
+    trajectory = flight = truth = None
     if (folder / "flight.csv").is_file():
-        t = _table(folder / "trajectory.csv", CSV_HEADER)
+        t = read_table(folder / "trajectory.csv", CSV_HEADER)
         trajectory = Samples(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
-        f = _table(folder / "flight.csv", FLIGHT_HEADER)
+        f = read_table(folder / "flight.csv", FLIGHT_HEADER)
         flight = FlightTable(f[:, 0], f[:, 1:4], f[:, 4:7], f[:, 7:11], f[:, 11:15],
                              f[:, 15:18])
+        if (folder / "truth.csv").is_file():
+            truth = read_table(folder / "truth.csv", TRUTH_HEADER)
     return Run(folder, read_map(folder / "map.json"), _json_file(folder / "metrics.json"),
                _json_file(folder / "parameters.json"), tree[:, 0:3],
-               tree[:, 3].astype(np.int64), path, trajectory, flight)
+               tree[:, 3].astype(np.int64), path, trajectory, flight, truth)
+
+
+def drift(flight: FlightTable, truth: FloatArray) -> FloatArray:
+    """(N,) the horizontal distance, m, from the flown position at each row of ``flight``
+    (a real drone's: its estimate) to the true one, ``truth`` (K, 4: t s, x, y, z m)
+    interpolated at the row's time (held at its ends)."""
+    true = np.column_stack([np.interp(flight.t, truth[:, 0], truth[:, axis]) for axis in (1, 2)])
+    return np.linalg.norm(flight.position[:, :2] - true, axis=1)

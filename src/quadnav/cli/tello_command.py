@@ -30,11 +30,13 @@ def emulate(args: argparse.Namespace) -> int:
 
     faults = Faults.real_tello() if args.imperfect else None
     with TelloEmulator(host=args.host, start=tuple(args.start), yaw=math.radians(args.yaw),
-                       time_scale=args.time_scale, faults=faults, seed=args.seed) as emulator:
+                       time_scale=args.time_scale, faults=faults, seed=args.seed,
+                       truth=args.truth) as emulator:
         imperfect = f", a real Tello's imperfections (seed {args.seed})" if faults else ""
+        truth = f", its true track written to {args.truth}" if args.truth else ""
         print(f"Emulated Tello at {emulator.host} (UDP 8889, state to the client's 8890), "
               f"start {tuple(args.start)} m, yaw {args.yaw:g} deg, time scale "
-              f"{args.time_scale:g}{imperfect}. Connect with djitellopy "
+              f"{args.time_scale:g}{imperfect}{truth}. Connect with djitellopy "
               f"Tello(host={emulator.host!r}). Ctrl-C to stop.", flush=True)
         while True:
             time.sleep(1.0)
@@ -68,6 +70,10 @@ def add_emulate_command(subparsers: argparse._SubParsersAction) -> None:
                              "axis, a takeoff height of 0.7-0.9 m, vgx/vgy a unit off a quarter "
                              "of the time, one reply in a hundred lost (drawn from --seed)")
     add_seed_argument(parser, "seed of the imperfections")
+    parser.add_argument("--truth", metavar="FILE",
+                        help="write the drone's true track to FILE as it flies (CSV "
+                             "unix_time_s,x,y,z: UNIX seconds and world metres, every 20 ms "
+                             "of emulated time), for 'quadnav tello fly --truth FILE'")
     parser.set_defaults(handler=emulate)
 
 

@@ -1,7 +1,8 @@
 """``quadnav tello fly``: plan like ``quadnav fly``, check, and fly it on a Tello.
 
-Exit codes: 0 landed at the goal (or a dry run printed); 1 no path, a safe stop (lost
-replies, refused command, geofence) with the drone on the floor, a landing by itself (low
+Exit codes: 0 landed at the goal (the dead-reckoned landing place within the tolerance of
+it), or a dry run printed; 1 no path, a landing off the goal, a safe stop (lost replies,
+refused command, geofence) with the drone on the floor, a landing by itself (low
 battery) or a refused takeoff (low battery); 2 bad input, including a plan that would
 leave the geofence or that ``rc`` mode cannot fly; 3 a lost link: no landing confirmed;
 128 + the signal after a stop signal (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP), after the safe
@@ -31,6 +32,7 @@ from quadnav.cli.args import (
 from quadnav.cli.progress import planning_bar
 from quadnav.errors import QuadnavError
 from quadnav.hardware.bridge import (
+    LANDING_TOLERANCE,
     MIN_BATTERY,
     MODES,
     TRACK_FIGURE,
@@ -49,6 +51,7 @@ from quadnav.hardware.link import TELLO_IP
 from quadnav.hardware.rc import RC_FULL_SPEED
 from quadnav.hardware.run_record import tello_run_content
 from quadnav.hardware.tello_log import LOG_NAME
+from quadnav.hardware.truth import TRUTH_FILE_HEADER, read_truth_file
 from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
 from quadnav.planning import get_planner
@@ -68,9 +71,9 @@ EXIT_FAILED = 1
 EXIT_LINK_LOST = 3
 #: The files tello fly writes.
 TELLO_FILES = (LOG_NAME, TRACK_FIGURE)
-_EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.STOPPED: EXIT_FAILED,
-               Status.AUTO_LANDED: EXIT_FAILED, Status.REFUSED: EXIT_FAILED,
-               Status.LINK_LOST: EXIT_LINK_LOST}
+_EXIT_CODES = {Status.LANDED: 0, Status.DRY_RUN: 0, Status.OFF_GOAL: EXIT_FAILED,
+               Status.STOPPED: EXIT_FAILED, Status.AUTO_LANDED: EXIT_FAILED,
+               Status.REFUSED: EXIT_FAILED, Status.LINK_LOST: EXIT_LINK_LOST}
 
 
 #: Cruise speeds, m/s: up to the Tello's go and rc limit.
@@ -128,6 +131,8 @@ def tello_fly(args: argparse.Namespace) -> int:
     settings = BridgeSettings(mode=args.mode, min_battery=args.min_battery,
                               time_scale=args.time_scale)
     folder = check_output_folder(args.output)
+    if args.truth is not None:
+        read_truth_file(args.truth)  # a file that cannot be read is bad input: before flying
     world = load_world(args.map)
     saved = _saved_plan(args)
     start, goal = (None, None) if saved is not None else resolve_start_goal(args, world)
@@ -147,9 +152,10 @@ def tello_fly(args: argparse.Namespace) -> int:
     # (what report, view, animate and blender read) is never another flight's.
     host = None if args.dry_run else args.host
     with replaced_folder(folder, (*TELLO_FILES, *RUN_FILES), keep_partial=True) as staging:
-        outcome, track = fly(plan, settings, staging, host=host)
-    written = write_run(tello_run_content(plan, settings, outcome, track, host), folder,
+        flown = fly(plan, settings, staging, host=host, truth=args.truth)
+    written = write_run(tello_run_content(plan, settings, flown, host), folder,
                         figures=not args.no_figures)
+    outcome = flown.outcome
     stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
     print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
     print(f"wrote {', '.join(str(folder / name) for name in (LOG_NAME, TRACK_FIGURE, *written))}")
@@ -178,8 +184,11 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     f"packet), DIR/{TRACK_FIGURE} (planned against flown) and a run folder "
                     "as 'quadnav fly' does (map, tree, planned path and trajectory, the "
                     "flown track as flight.csv, metrics, figures, report), which 'quadnav "
-                    "report', 'view', 'animate' and 'blender' read. Exit 0 when "
-                    "landed at the goal; 1 on a safe stop, a landing by itself, a refused "
+                    "report', 'view', 'animate' and 'blender' read. The last line gives "
+                    "the landing place the bridge's dead reckoning puts the drone at, with "
+                    "its 1-sigma uncertainty. Exit 0 when landed at the goal (that place "
+                    f"within {LANDING_TOLERANCE:g} m of it); 1 on a landing off the goal, a "
+                    "safe stop, a landing by itself, a refused "
                     "takeoff or no path; 2 on bad input; 3 when the link was lost and no "
                     "landing was confirmed; 128 + the signal (130 Ctrl-C, 143 SIGTERM, 129 "
                     "SIGHUP) after a stop signal.")
@@ -225,6 +234,13 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
                    help=f"drone seconds per wall-clock second, {TIME_SCALE.describe()}: 1 "
                         "for a real drone, the emulator's --time-scale for an emulated one "
                         "(default: 1)")
+    p.add_argument("--truth", metavar="FILE",
+                   help="the drone's true track, as 'quadnav tello emulate --truth FILE' "
+                        "writes it while it flies (or a motion-capture system beside a real "
+                        f"drone: header {TRUTH_FILE_HEADER}, UNIX seconds and map metres): "
+                        "after the landing, its rows from this flight are copied into DIR/"
+                        "truth.csv, and the metrics, report and view show the estimate "
+                        "against it")
     p.add_argument("--no-figures", action="store_true",
                    help="write the run folder's data files but not its figures and report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

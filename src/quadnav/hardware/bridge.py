@@ -21,7 +21,11 @@ refused and nothing flies); ``takeoff``; then
   end horizontally (the landing is straight down), or :data:`RC_SETTLE` s after it; then
   the sticks are centred;
 
-then ``land``. **Safe stop**: a reply overdue by more than the link timeout, no state
+then ``land``. **Where it landed**: one place, the dead-reckoned estimate when the landing
+was confirmed (:mod:`quadnav.hardware.dead_reckoning`, which also takes in each move's
+``ok``), with its 1-sigma uncertainty; a flight flown to its end landed at the goal when
+that place lies within :data:`LANDING_TOLERANCE` of the floor under the goal, else off
+it. **Safe stop**: a reply overdue by more than the link timeout, no state
 packet for that long, a refused command, a dead-reckoned position outside the geofence
 (``rc``; on a leg, outside the leg's room, see :meth:`_Flight._region`) or a stop
 signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop`` (hover) and then
@@ -42,10 +46,11 @@ link timeout is wall-clock.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import logging
 import signal
-from collections.abc import Callable
+import warnings
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -57,9 +62,10 @@ from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.hardware.curves import Curve
-from quadnav.hardware.dead_reckoning import DeadReckoning
+from quadnav.hardware.dead_reckoning import DeadReckoning, Estimate
 from quadnav.hardware.drone_clock import Clock, VirtualClock
 from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
+from quadnav.hardware.frames import to_m
 from quadnav.hardware.geofence import GeofenceError, Region
 from quadnav.hardware.landing import Lander
 from quadnav.hardware.link import (
@@ -83,7 +89,9 @@ from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, trac
 from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
 from quadnav.hardware.stop_signals import StopSignals, signal_name
 from quadnav.hardware.tello_log import LOG_NAME, TelloLog, open_log
+from quadnav.hardware.truth import flight_truth
 from quadnav.signals import signal_of
+from quadnav.sim.settings import SimSettings
 from quadnav.world.placement import format_point
 
 #: Flight modes.
@@ -116,12 +124,17 @@ RC_REACH = GOAL_TOLERANCE + run_length(LEG_CREEP)
 MAX_RC_WALL_RATE = 500.0
 #: File name of the figure of the flight in the output folder.
 TRACK_FIGURE = "tello_track.png"
+#: A flight flown to its end lands at the goal when the dead-reckoned landing place lies
+#: this close to the floor under the goal horizontally, m: a simulated flight's goal
+#: tolerance (``quadnav fly``).
+LANDING_TOLERANCE = SimSettings().goal_tolerance
 
 
 class Status(Enum):
     """How a flight ended."""
 
-    LANDED = "landed"                 # flown to the end and landed
+    LANDED = "landed"                 # flown to the end and landed at the goal
+    OFF_GOAL = "landed off the goal"  # flown to the end, landed beyond the tolerance
     STOPPED = "stopped"               # a fault: safe stop, on the floor
     AUTO_LANDED = "landed by itself"  # low battery: the Tello landed by itself
     LINK_LOST = "link lost"           # no landing confirmed: the drone's end is not known
@@ -133,11 +146,14 @@ class Status(Enum):
 @dataclass(frozen=True)
 class Outcome:
     """How a flight ended, and one line saying so; ``signum``: the stop signal that
-    ended it (:attr:`Status.INTERRUPTED`), else None."""
+    ended it (:attr:`Status.INTERRUPTED`), else None; ``landing``: where the dead
+    reckoning put the drone when its landing was confirmed (None: not flown, a dry run,
+    or no landing confirmed)."""
 
     status: Status
     message: str
     signum: int | None = None
+    landing: Estimate | None = None
 
 
 @dataclass(frozen=True)
@@ -216,7 +232,9 @@ class _Flight:
             return Outcome(Status.REFUSED, refusal)
         try:
             self.if_lost = "finishes its takeoff, hovers"
+            self.estimator.begin_move(np.zeros(3))  # straight up
             self.link.command("takeoff", self._timeout(TAKEOFF_TIME))
+            self.estimator.end_move()
             done = self._follow() if self.settings.mode == "rc" else self._go()
             self.signals.hold()
             landing = self.lander.land()
@@ -227,12 +245,12 @@ class _Flight:
         except KeyboardInterrupt as interrupt:
             signum = signal_of(interrupt)
             return self._safe_stop(Status.INTERRUPTED, stopped_by(signum), signum)
-        where = format_point(self.plan.landing_ground)
         if not self.link.reports_state:
-            return Outcome(Status.DRY_RUN, f"{done}, then land at {where}; nothing was sent")
+            return Outcome(Status.DRY_RUN, f"{done}, then land at "
+                           f"{format_point(self.plan.landing_ground)}; nothing was sent")
         if not landing.confirmed:
             return self._link_lost(f"flew {done}, then {landing.text}", Status.LINK_LOST)
-        return Outcome(Status.LANDED, f"landed at {where} after {done}")
+        return landed(self.plan, done, landing.place)
 
     def _preflight(self) -> str | None:
         """Connect and check the battery: why the takeoff is refused, or None."""
@@ -282,8 +300,10 @@ class _Flight:
         self.if_lost = (f"finishes the {'move' if curving else 'go move'} it flies (inside "
                         "the geofence), hovers")
         for move in moves:
+            self.estimator.begin_move(to_m(move.step))
             self.link.command(move.command,
                               self._timeout(MOVE_FACTOR * move.duration + MOVE_SETTLE))
+            self.estimator.end_move()
         curves = sum(isinstance(move, Curve) for move in moves)
         return (f"{len(moves) - curves} go moves and {curves} "
                 f"curve{'' if curves == 1 else 's'}" if curving else f"{len(moves)} go moves")
@@ -370,7 +390,8 @@ class _Flight:
             return self._link_lost(f"{reason}; {stop}, and {landing.text}",
                                    status if signum is not None else Status.LINK_LOST,
                                    signum)
-        return Outcome(status, f"{reason}; safe stop: {stop}, {landing.text}", signum)
+        return Outcome(status, f"{reason}; safe stop: {stop}, {landing.text}", signum,
+                       landing.place)
 
     def _landed_by_itself(self, reason: str) -> Outcome:
         """The drone lands by itself: centre the sticks, land, wait for the floor."""
@@ -382,7 +403,7 @@ class _Flight:
         if not landing.confirmed:
             return self._link_lost(f"{reason}; {landing.text}", Status.LINK_LOST)
         return Outcome(Status.AUTO_LANDED, f"{reason}; {landing.text}, battery "
-                       f"{self.link.get_battery()} %")
+                       f"{self.link.get_battery()} %", landing=landing.place)
 
     def _link_lost(self, what: str, status: Status, signum: int | None = None) -> Outcome:
         """The outcome of a landing never confirmed: what happened, and what the drone
@@ -394,6 +415,19 @@ class _Flight:
         return Outcome(status, f"{what}{lost}; if the Tello heard none of it, it "
                        f"{self.if_lost} and lands by itself {AUTO_LAND_AFTER:g} s after "
                        f"the last command it heard{seen}", signum)
+
+
+def landed(plan: FlightPlan, done: str, place: Estimate) -> Outcome:
+    """The outcome of a flight of ``plan`` flown to its end (``done``, in words) and
+    landed at ``place``: at the goal if within :data:`LANDING_TOLERANCE` of the floor
+    under it horizontally, else off it."""
+    goal = plan.landing_ground
+    off = float(np.linalg.norm(place.point[:2] - goal[:2]))
+    where = f"landed at {place.text}, {off:.2f} m from the goal"
+    if off <= LANDING_TOLERANCE:
+        return Outcome(Status.LANDED, f"{where}, after {done}", landing=place)
+    return Outcome(Status.OFF_GOAL, f"{where} {format_point(goal)}, beyond its "
+                   f"{LANDING_TOLERANCE:g} m tolerance, after {done}", landing=place)
 
 
 def stopped_by(signum: int) -> str:
@@ -410,8 +444,9 @@ def with_held_signals(outcome: Outcome, held: list[int]) -> Outcome:
     names = ", ".join(signal_name(signum) for signum in held)
     message = f"{outcome.message}; {names} came later and waited until the drone was down"
     if outcome.signum is not None:
-        return Outcome(outcome.status, message, outcome.signum)
-    return Outcome(Status.INTERRUPTED, message, held[0])
+        return dataclasses.replace(outcome, message=message)
+    return dataclasses.replace(outcome, status=Status.INTERRUPTED, message=message,
+                               signum=held[0])
 
 
 def _tello_link(host: str, log: TelloLog, estimator: DeadReckoning,
@@ -461,9 +496,26 @@ def rc_pace(plan: FlightPlan, settings: BridgeSettings) -> SlowedFlight:
     return slowed
 
 
+@dataclass(frozen=True, eq=False)
+class Flown:
+    """What :func:`fly` gives back.
+
+    Attributes:
+        outcome: how the flight ended.
+        track: (N, 4) the dead-reckoned track: drone seconds from the start of the
+            estimate, map x, y, z (m), at each state packet.
+        truth: (K, 4) the true track in the same time (see :mod:`quadnav.hardware.truth`),
+            or None when none was given or read.
+    """
+
+    outcome: Outcome
+    track: FloatArray
+    truth: FloatArray | None = None
+
+
 def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
         host: str | None = None, stream: TextIO | None = None,
-        truth: Callable[[], FloatArray] | None = None) -> tuple[Outcome, FloatArray]:
+        truth: str | Path | None = None) -> Flown:
     """Fly ``plan`` on the Tello at ``host`` — or, with no host, print the commands of a
     dry run to ``stream`` — and write the log and the figure into ``folder``.
 
@@ -473,11 +525,13 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
         folder: gets :data:`~quadnav.hardware.tello_log.LOG_NAME` and :data:`TRACK_FIGURE`.
         host: the drone's IPv4 address; None for a dry run.
         stream: where a dry run prints (default: standard output as it is when called).
-        truth: gives the drone's true track (N, 3), m, after the flight, when known (an
-            emulator's), to draw beside the dead-reckoned one.
+        truth: a file that something outside the bridge (the emulator) writes the drone's
+            true track to (:mod:`quadnav.hardware.truth`), read after the flight and drawn
+            beside the dead-reckoned track; a file that cannot be read, or holds none of
+            this flight, is warned about and left out.
 
     Returns:
-        The outcome, and the dead-reckoned track (N, 4): drone seconds, map x, y, z (m).
+        The outcome, the dead-reckoned track and the true one.
 
     Raises:
         MoveError: (waypoints mode) the route cannot be flown with ``go`` moves; nothing
@@ -515,18 +569,35 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
             finally:
                 link.close()
             track = estimator.track()
-            _draw(plan, settings.mode, track, truth, outcome, folder / TRACK_FIGURE)
-    return with_held_signals(outcome, signals.take()), track
+            true_track = (None if truth is None or dry_run
+                          else _read_truth(truth, estimator.epoch, settings.time_scale))
+            _draw(plan, settings.mode, track, true_track, outcome, folder / TRACK_FIGURE)
+    return Flown(with_held_signals(outcome, signals.take()), track, true_track)
 
 
-def _draw(plan: FlightPlan, mode: str, track: FloatArray,
-          truth: Callable[[], FloatArray] | None, outcome: Outcome, path: Path) -> None:
+def _read_truth(path: str | Path, epoch: float, time_scale: float) -> FloatArray | None:
+    """The true track in ``path`` since ``epoch`` (:func:`~quadnav.hardware.truth.
+    flight_truth`), or None, with a warning, if it cannot be read or holds none."""
+    try:
+        truth = flight_truth(path, epoch, time_scale)
+    except QuadnavError as error:
+        warnings.warn(f"{error}; no true track recorded", stacklevel=3)
+        return None
+    if not len(truth):
+        warnings.warn(f"{path}: no sample since the flight began (is the emulator writing "
+                      "it, with --truth?); no true track recorded", stacklevel=3)
+        return None
+    return truth
+
+
+def _draw(plan: FlightPlan, mode: str, track: FloatArray, truth: FloatArray | None,
+          outcome: Outcome, path: Path) -> None:
     """Save the figure of the flight: planned, dead-reckoned ``track`` (N, 4) and, when
-    known, the true track."""
+    known, the true track (K, 4)."""
     from quadnav.hardware.track_figure import track_figure  # matplotlib: only when needed
     from quadnav.viz.figures import save_figure
 
     flown = {"dead reckoning (state packets)": track[:, 1:]}
     if truth is not None:
-        flown["true track (emulator)"] = truth()
+        flown["true track"] = truth[:, 1:]
     save_figure(track_figure(plan, mode, flown, outcome.status.value), path)

@@ -365,9 +365,10 @@ class EmulatedDrone:
             self.battery_drain * DRAIN_FLYING if self.flying else DRAIN_IDLE))
         return self._check_motion_end()
 
-    def track(self) -> tuple[FloatArray, FloatArray]:
-        """Times (N,) s and world positions (N, 3) m every :data:`TRACK_PERIOD` s."""
-        return np.array(self._track_t), np.array(self._track_p).reshape(-1, 3)
+    def track(self, since: int = 0) -> tuple[FloatArray, FloatArray]:
+        """Times (N,) s and world positions (N, 3) m every :data:`TRACK_PERIOD` s, from
+        the ``since``-th sample on."""
+        return np.array(self._track_t[since:]), np.array(self._track_p[since:]).reshape(-1, 3)
 
     def telemetry(self, mission_pads: bool = False) -> Telemetry:
         """The state packet's values now (see :class:`~quadnav.hardware.sdk.Telemetry`)."""

@@ -38,6 +38,14 @@ from djitellopy's issues and the SDK notes), each drawn from the emulator's seed
 height that varies, ``vgx``/``vgy`` that read a unit off now and then, and lost replies.
 (``out of range`` for a move shorter than 20 cm on every axis is the SDK's own rule, which
 the emulator always keeps.)
+
+Ground truth: with ``truth``, the emulator writes the drone's true track to that file as it
+flies (:class:`~quadnav.hardware.truth.TruthWriter`: UNIX time and world position, every
+:data:`~quadnav.hardware.emulated_drone.TRACK_PERIOD` emulated seconds), each sample
+before the reply it precedes, so a client that has heard ``ok`` to ``land`` finds the
+landing in the file. It is the one channel from the emulator's insides to a client such
+as ``quadnav tello fly --truth FILE``, as a motion-capture system's file would be beside a
+real drone.
 """
 
 from __future__ import annotations
@@ -52,6 +60,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 
@@ -70,6 +79,7 @@ from quadnav.hardware.sdk import (
     Command,
     SdkError,
 )
+from quadnav.hardware.truth import TruthWriter
 
 #: Speed of ``up`` ... ``back`` until ``speed`` sets another, cm/s.
 DEFAULT_SPEED_CM_S = 100
@@ -212,11 +222,14 @@ class TelloEmulator:
             stream of its own, so a flight's moves and takeoff repeat for a seed).
         client_netns: the network namespace of the client (default: the caller's). For
             djitellopy in this process, :func:`djitellopy_namespace`.
+        truth: a file to write the drone's true track to as it flies (see the module),
+            or None.
     """
 
     def __init__(self, host: str = DEFAULT_HOST, start: Sequence[float] = (0.0, 0.0, 0.0),
                  yaw: float = 0.0, time_scale: float = 1.0, faults: Faults | None = None,
-                 seed: int = 0, client_netns: NetNamespace | None = None) -> None:
+                 seed: int = 0, client_netns: NetNamespace | None = None,
+                 truth: str | Path | None = None) -> None:
         if not (math.isfinite(time_scale) and time_scale > 0):
             raise QuadnavError(f"Tello emulator time scale {time_scale}: expected a number > 0")
         start_point = np.asarray(start, dtype=np.float64)
@@ -248,6 +261,10 @@ class TelloEmulator:
         self._namespaces: list[NetNamespace] = []
         self._link: Link | None = None
         self._socket: socket.socket | None = None
+        self._truth_path = truth
+        self._truth: TruthWriter | None = None
+        self._truth_written = 0  # samples of the track written to it
+        self._unix_offset = 0.0  # UNIX time minus the monotonic clock, s
 
     # --- life cycle ----------------------------------------------------------------
 
@@ -255,6 +272,8 @@ class TelloEmulator:
         """Make the network link and the socket, and start the emulator's threads."""
         _warm_up()
         try:
+            if self._truth_path is not None:
+                self._truth = TruthWriter(self._truth_path)
             drone_ns = NetNamespace.create()
             self._namespaces.append(drone_ns)
             client_ns = self._client_netns
@@ -270,6 +289,7 @@ class TelloEmulator:
             self.stop()
             raise
         self._advanced = time.monotonic()  # the flight's time starts now
+        self._unix_offset = time.time() - self._advanced
         for target, name in ((self._receive, "receiver"), (self._run, "clock")):
             thread = threading.Thread(target=target, name=f"tello-emulator-{name}", daemon=True)
             thread.start()
@@ -291,6 +311,9 @@ class TelloEmulator:
         for namespace in self._namespaces:
             namespace.close()
         self._namespaces.clear()
+        if self._truth is not None:
+            self._truth.close()
+            self._truth = None
 
     def __enter__(self) -> TelloEmulator:
         return self.start()
@@ -362,7 +385,20 @@ class TelloEmulator:
         if now > self._advanced:
             ended = self._drone.advance(min(now - self._advanced, MAX_STEP) * self.time_scale)
             self._advanced = now
+            self._write_truth(now)
             self._after_step(ended)
+
+    def _write_truth(self, now: float) -> None:
+        """Write the track's new samples to the truth file, if any, stamped with the UNIX
+        time each stands for (the emulated time ``now`` stands for, less the emulated
+        seconds since them over the time scale)."""
+        if self._truth is None:
+            return
+        times, positions = self._drone.track(self._truth_written)
+        if len(times):
+            back = (self._drone.time - times) / self.time_scale
+            self._truth.write(self._unix_offset + now - back, positions)
+            self._truth_written += len(times)
 
     def _handle(self, text: str, address: tuple[str, int]) -> None:
         self._received.append((self._drone.time, text))

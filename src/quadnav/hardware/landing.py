@@ -13,11 +13,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from quadnav.hardware.dead_reckoning import DeadReckoning
+import numpy as np
+
+from quadnav.hardware.dead_reckoning import DeadReckoning, Estimate
 from quadnav.hardware.frames import GROUND_Z
 from quadnav.hardware.link import AutoLandingError, CommandRefusedError, Link, LinkLostError
 from quadnav.hardware.tello_log import TelloLog
-from quadnav.world.placement import format_point
 
 #: Drone seconds a landing and a ``stop`` may take before the reply is due.
 LAND_TIME = 10.0
@@ -32,10 +33,12 @@ _POLL = 0.01
 
 @dataclass(frozen=True)
 class Landing:
-    """How a landing went: ``confirmed`` (by ``ok`` or the state packets) and in words."""
+    """How a landing went: ``confirmed`` (by ``ok`` or the state packets), in words, and
+    where the dead reckoning puts the drone on the floor (``place``; None unconfirmed)."""
 
     confirmed: bool
     text: str
+    place: Estimate | None = None
 
 
 @dataclass(frozen=True)
@@ -44,7 +47,8 @@ class Lander:
 
     Attributes:
         link: the link to the drone.
-        estimator: where the drone is, for the messages.
+        estimator: where the drone is (told of each ``land`` as a move straight down),
+            for the messages and the landing place.
         log: gets an event for each refused or unanswered command.
         timeout: wall-clock seconds to wait for the reply to a command that takes the
             given drone seconds.
@@ -72,8 +76,11 @@ class Lander:
         """Send ``land`` until the landing is confirmed (see the module's description)."""
         for _ in range(LAND_ATTEMPTS):
             try:
+                self.estimator.begin_move(np.zeros(3))  # straight down
                 self.link.command("land", self.timeout(LAND_TIME))
-                return Landing(True, f"landed at about {self.floor_point()}")
+                self.estimator.end_move()
+                place = self.floor_place()
+                return Landing(True, f"landed at about {place.text}", place)
             except AutoLandingError as error:
                 self.log.event(f"land: {error}")
                 if self._await_floor():
@@ -86,7 +93,9 @@ class Lander:
 
     def _on_floor(self) -> Landing:
         """Landed, as the state packets show: one message whichever way it was seen."""
-        return Landing(True, f"it is on the floor at about {self.floor_point()} (state packets)")
+        place = self.floor_place()
+        return Landing(True, f"it is on the floor at about {place.text} (state packets)",
+                       place)
 
     def _await_floor(self) -> bool:
         """Wait (up to a landing's time) for fresh state packets with the drone on the
@@ -106,7 +115,8 @@ class Lander:
         return (link.reports_state and link.state_age() <= self.link_timeout
                 and link.get_height() <= LANDED_HEIGHT_CM)
 
-    def floor_point(self) -> str:
-        """The floor under the dead-reckoned position, as text."""
-        x, y, _ = self.estimator.position()
-        return format_point([x, y, GROUND_Z])
+    def floor_place(self) -> Estimate:
+        """The floor under the dead-reckoned position, with its uncertainty."""
+        estimate = self.estimator.estimate()
+        x, y, _ = estimate.point
+        return Estimate(np.array([x, y, GROUND_Z]), estimate.sigma)

@@ -18,11 +18,11 @@ from quadnav.hardware.flight_plan import FlightPlan
 from quadnav.viz.flight_figures import FLOWN_COLOR, SMALL_FONT, TITLE_FONT, TRAJECTORY_COLOR
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import map_legend
-from quadnav.viz.style import outlined
+from quadnav.viz.style import TRUTH_COLOR, outlined
 from quadnav.viz.topview import draw_map, plot_points, two_views
 
 #: Colours of the flown tracks, in the order given.
-TRACK_COLORS = (FLOWN_COLOR, "tab:purple", "tab:cyan")
+TRACK_COLORS = (FLOWN_COLOR, TRUTH_COLOR, "tab:cyan")
 
 
 def track_figure(plan: FlightPlan, mode: str, flown: Mapping[str, FloatArray],

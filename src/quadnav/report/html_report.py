@@ -24,9 +24,10 @@ from matplotlib.figure import Figure
 from quadnav import __version__
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.runs import Run
+from quadnav.runs import DRIFT_FIGURE, Run
 from quadnav.tracking import step_summary
 from quadnav.viz.flight_figures import figure_makers, run_outcome
+from quadnav.world.placement import format_estimate, format_point
 
 #: File name endings accepted for a report.
 SUFFIXES = (".html", ".htm")
@@ -36,8 +37,9 @@ UNITS = (("_m_s", "m/s"), ("_s", "s"), ("_m", "m"))
 #: What each figure shows, by its file name in the run folder.
 CAPTIONS = {
     "flight_3d.png": "The map with the explored tree (blue), the path (red, dashed), the "
-                     "trajectory (orange) and the flown track (black), seen obliquely and "
-                     "from above.",
+                     "trajectory (orange) and the flown track (black; a Tello's: its "
+                     "dead-reckoned estimate, and in purple its true track when known), "
+                     "seen obliquely and from above.",
     "flight_states.png": "Desired (dashed) against actual (solid) position, velocity and "
                          "acceleration per axis against time (for a step: the 2 % band, "
                          "the peak and the settling time).",
@@ -45,6 +47,9 @@ CAPTIONS = {
                           "(dashed) and the largest recorded error.",
     "attitude_motors.png": "Roll, pitch and yaw (the yaw reference dashed) and the four "
                            "motor commands against time.",
+    DRIFT_FIGURE: "The drift of the dead-reckoned estimate: its horizontal distance from "
+                  "the true track (the emulator's) against time, with the 1-sigma "
+                  "uncertainty stated for the landing (dashed).",
 }
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
@@ -169,8 +174,9 @@ def _summary(run: Run) -> str:
         parts += [] if run.is_track else [f"path {m['path_length_m']:.2f} m"]
         parts += [f"flight {m['flight_time_s']:.2f} s",
                   f"tracking error RMS {CM_PER_M * m['rms_tracking_error_m']:.2f} cm, max "
-                  f"{CM_PER_M * m['max_tracking_error_m']:.2f} cm",
-                  f"final error {CM_PER_M * m['final_error_m']:.2f} cm"]
+                  f"{CM_PER_M * m['max_tracking_error_m']:.2f} cm"]
+        parts += (_landing(m) if run.is_hardware
+                  else [f"final error {CM_PER_M * m['final_error_m']:.2f} cm"])
         if not run.is_track:
             parts.append("min clearance " + ("none" if clearance is None
                                              else f"{clearance:.3f} m"))
@@ -179,6 +185,25 @@ def _summary(run: Run) -> str:
     status = "success" if m["success"] else "failure"
     return (f'<p><span class="outcome {status}">{html.escape(run_outcome(m))}</span> — '
             f"{html.escape(', '.join(parts))}</p>")
+
+
+def _landing(metrics: dict) -> list[str]:
+    """A real drone's landing: where its dead reckoning put it, with the stated 1-sigma
+    (as ``quadnav tello fly`` printed it), and where it truly landed and the estimate's
+    drift from the truth, when known."""
+    m = metrics
+    if m.get("landing_m") is None:
+        return ["landing not confirmed"]
+    parts = [f"landed at {format_estimate(m['landing_m'], m['landing_sigma_m'])} (dead "
+             f"reckoning), {m['final_error_m']:.2f} m from the goal (tolerance "
+             f"{m['goal_tolerance_m']:g} m)"]
+    if m.get("true_landing_m") is not None:
+        parts.append(f"truly at {format_point(m['true_landing_m'])}, "
+                     f"{m['true_final_error_m']:.2f} m from the goal: drift "
+                     f"{CM_PER_M * m['landing_drift_m']:.2f} cm at the landing, RMS "
+                     f"{CM_PER_M * m['rms_drift_m']:.2f} cm, max "
+                     f"{CM_PER_M * m['max_drift_m']:.2f} cm")
+    return parts
 
 
 def run_section(run: Run, number: int, folder: Path) -> str:

@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from quadnav.runs import FIGURES, FlightTable, Run
+from quadnav.runs import DRIFT_FIGURE, FIGURES, FlightTable, Run, drift
 from quadnav.sim.flight import Ending
 from quadnav.sim.step_response import SETTLING_BAND
 from quadnav.vehicle.quaternion import euler_angles
@@ -34,6 +34,7 @@ from quadnav.viz.style import (
     PATH_COLOR,
     STEP_COLOR,
     TRAJECTORY_COLOR,
+    TRUTH_COLOR,
     outlined,
 )
 from quadnav.viz.topview import draw_fence_top, draw_map, plot_points, two_views
@@ -88,6 +89,9 @@ def _draw_run(ax: Axes, run: Run) -> list:
                                zorder=22,
                                label=f"flown{', dead reckoning' if run.is_hardware else ''} "
                                      f"({flight.t[-1]:.2f} s)")
+        if run.truth is not None:
+            handles += plot_points(ax, run.truth[:, 1:4], color=TRUTH_COLOR, linewidth=1.0,
+                                   zorder=22, label="true track")
         if metrics["ending"] == Ending.COLLISION.value:
             handles += plot_points(ax, flight.position[-1:], color=COLLISION_COLOR,
                                    marker="X", markersize=13, markeredgecolor="black",
@@ -99,7 +103,8 @@ def _draw_run(ax: Axes, run: Run) -> list:
 
 def flight_3d_figure(run: Run) -> Figure:
     """The map, the explored tree, the path (red, dashed, outlined), the trajectory and
-    the flown track seen obliquely (3D) and from above (2D, to scale), a cross where a
+    the flown track (a real drone's: also its true track, when known) seen obliquely (3D)
+    and from above (2D, to scale), a cross where a
     collision stopped the flight, one legend below both; the title gives the map (a
     track: the reference), the outcome, the RMS tracking error (a real drone's: from
     the planned route, and its geofence dotted in the top view) and the top speed (not
@@ -312,15 +317,45 @@ def attitude_motors_figure(run: Run) -> Figure:
     return finish(fig)
 
 
+def drift_figure(run: Run) -> Figure:
+    """A real drone's run with a true track: the horizontal distance from the estimate to
+    the truth against time, cm (:func:`~quadnav.runs.drift`), with the 1-sigma stated for
+    the landing dashed and the drift at the landing, RMS and largest in the title."""
+    flight, metrics = _flight(run), run.metrics
+    drifts = CM_PER_M * drift(flight, run.truth)
+    fig, ax = plt.subplots(figsize=(10, 4), dpi=120, layout="constrained")
+    ax.plot(flight.t, drifts, color=TRUTH_COLOR, linewidth=1.2,
+            label="estimate's distance from the truth")
+    sigma, landing = metrics.get("landing_sigma_m"), metrics.get("landing_drift_m")
+    top = float(drifts.max())
+    if sigma is not None:
+        ax.axhline(CM_PER_M * sigma, color="black", linestyle="--", linewidth=0.8,
+                   label=f"1-sigma stated at the landing ({CM_PER_M * sigma:.2f} cm)")
+        top = max(top, CM_PER_M * sigma)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("horizontal drift (cm)")
+    ax.set_ylim(bottom=0.0, top=HEADROOM * max(top, 1e-6))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=SMALL_FONT)
+    at_landing = "" if landing is None else f"{CM_PER_M * landing:.2f} cm at the landing, "
+    ax.set_title(f"dead-reckoned estimate against the true track ({metrics['ending']})\n"
+                 f"drift {at_landing}RMS {CM_PER_M * metrics['rms_drift_m']:.2f} cm, max "
+                 f"{CM_PER_M * metrics['max_drift_m']:.2f} cm over every state packet",
+                 fontsize=TITLE_FONT)
+    return finish(fig)
+
+
 def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
     """The figures ``run`` has, by their file name in the run folder, in the order of
     :data:`~quadnav.runs.FIGURES`: the 3D view always, the states, the tracking
     error and the attitude and motors when there was a flight (of a real drone's flight,
-    the tracking error alone: see :mod:`quadnav.hardware.run_record`)."""
+    the tracking error alone, and with a true track the drift from it,
+    :data:`~quadnav.runs.DRIFT_FIGURE`: see :mod:`quadnav.hardware.run_record`)."""
     makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
                                 tracking_error_figure, attitude_motors_figure), strict=True))
     if run.flight is None:
         return {FIGURES[0]: flight_3d_figure}
     if run.is_hardware:  # a tracked position: no timed reference, no motor commands
-        return {name: makers[name] for name in (FIGURES[0], FIGURES[2])}
+        hardware = {name: makers[name] for name in (FIGURES[0], FIGURES[2])}
+        return hardware | ({DRIFT_FIGURE: drift_figure} if run.truth is not None else {})
     return makers

@@ -2,7 +2,8 @@
 
 The page (``quadnav view DIR``, ``quadnav fly --html``) shows the map (blocks in their
 colours, the boundary as a transparent box), the explored tree, the path in red, the
-trajectory coloured by speed, the flown track, start and goal, and the drone's body box
+trajectory coloured by speed, the flown track (a Tello's: its dead-reckoned estimate,
+and its true track when the run folder has one), start and goal, and the drone's body box
 that a time slider moves along the flight; beside it, the metrics. It draws with three.js
 (WebGL, a depth buffer, so near things hide far ones) and its orbit controls: rotate by
 dragging, pan with shift or the right button, zoom with the wheel. No network is needed:
@@ -72,7 +73,8 @@ def _subtitle(metrics: dict) -> str:
 def viewer_data(run: Run) -> dict:
     """The numbers the page draws, as JSON-ready lists (positions flattened x, y, z after
     x, y, z, in m; speeds in m/s; times in s). ``path``, ``trajectory`` and ``flight`` are
-    None for a run that found no path."""
+    None for a run that found no path; ``truth`` (the true track's positions) is None
+    unless the run has one."""
     world, edges = run.world, run.tree_edges()
     vehicle = run.parameters.get("vehicle", {})
     arm = float(vehicle.get("arm_length", 0.0))
@@ -89,6 +91,7 @@ def viewer_data(run: Run) -> dict:
         "path": _point(run.path),
         "trajectory": None,
         "flight": None,
+        "truth": None if run.truth is None else _numbers(run.truth[:, 1:4]),
         "collision": bool(run.metrics.get("collision")),
         "armLength": arm,
         "bodySize": [float(v) for v in vehicle.get("body_size", (2 * arm, 2 * arm, arm / 2))],

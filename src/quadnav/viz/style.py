@@ -12,6 +12,8 @@ START_COLOR = "red"
 GOAL_COLOR = "green"
 TRAJECTORY_COLOR = "tab:orange"
 FLOWN_COLOR = "black"
+#: The true track of a real drone's flight, where it is known (the emulator's).
+TRUTH_COLOR = "tab:purple"
 COLLISION_COLOR = "magenta"
 DRONE_COLOR = "tab:purple"
 #: Drawn size of the drone marker relative to the map's largest extent.

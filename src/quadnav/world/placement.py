@@ -54,6 +54,11 @@ def format_point(point: ArrayLike) -> str:
     return "(" + ", ".join(f"{v:.4g}" for v in np.asarray(point, dtype=float)) + ")"
 
 
+def format_estimate(point: ArrayLike, sigma: float) -> str:
+    """``(x, y, z) +- s m``: a point and its 1-sigma uncertainty (m), for messages."""
+    return f"{format_point(point)} +- {sigma:.2f} m"
+
+
 def format_box(box: ArrayLike) -> str:
     """``[xmin, xmax] x [ymin, ymax] x [zmin, zmax]`` for messages."""
     b = np.asarray(box, dtype=float)

@@ -23,6 +23,7 @@
   };
   const viridis = (f) => `rgb(${viridisRgb(f).map(Math.round)})`;
   const START = "#e00000", GOAL = "#008000", PATH = "#e00000", FLOWN = "#111111";
+  const TRUTH = "#9467bd"; // a Tello run's true track (matplotlib's tab:purple)
   const TREE = "#598cd9", DRONE = "#ff7f0e", COLLISION = "#e000e0";
   const layers = {}; // name -> {label, swatch, objects}
   const addLayer = (name, label, swatch) => { layers[name] = { label, swatch, objects: [] }; };
@@ -38,6 +39,7 @@
   if (data.trajectory) addLayer("trajectory", "trajectory (colour: speed)",
     `linear-gradient(to right, ${viridis(0)}, ${viridis(0.5)}, ${viridis(1)})`);
   if (data.flight) addLayer("flown", "flown track", FLOWN);
+  if (data.truth) addLayer("truth", "true track", TRUTH);
   const speedMax = data.trajectory ? data.trajectory.speed.reduce((a, b) => Math.max(a, b), 1e-9)
     : 0;
 
@@ -155,6 +157,7 @@
     layers.trajectory.objects.push(wideLine(data.trajectory.position, 3, null, colours));
   }
   if (data.flight) layers.flown.objects.push(wideLine(data.flight.position, 1.5, FLOWN));
+  if (data.truth) layers.truth.objects.push(wideLine(data.truth, 1.5, TRUTH));
   for (const layer of Object.values(layers)) scene.add(...layer.objects);
 
   // start, goal, and where a collision stopped the flight
