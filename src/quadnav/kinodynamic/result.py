@@ -45,9 +45,10 @@ class KinoResult:
             at the start (0 without a leg); the rest of the plan keeps the whole margin
             but for the goal leg.
         closing_controls: how many controls, after the state reached in the goal region
-            and before the goal leg, take the plan onto the goal (the quadrotor's closing
-            stop, which ends at rest exactly there, or where the goal leg begins); 0 when
-            the plan ends in the goal region as reached.
+            and before the goal leg, take the plan onto the goal, or to where the goal leg
+            begins (the quadrotor's closing stop, which ends there at rest; the
+            differential drive's turn and straight drive to the leg); 0 when the plan ends
+            where it reached the goal region.
         goal_leg_controls: how many of the last controls fly the leg into the safety
             margin to a goal inside it (0 without a leg).
     """
