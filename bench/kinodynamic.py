@@ -201,8 +201,9 @@ def diffdrive_for_ompl(problem: Problem, settings: KinoSettings) -> OmplVehicle:
     from ompl import base as ob
 
     model = dd.DiffDrive()
-    free, start, goal = dd.check_query(problem.world, problem.start, problem.goal, model,
-                                       problem.margin)
+    free, start, _, goal_leg = dd.check_query(problem.world, problem.start, problem.goal,
+                                              model, problem.margin)
+    goal = goal_leg[0]
     space = ob.SE2StateSpace()
     space.setBounds(_bounds(free.lower, free.upper))
 

@@ -366,6 +366,30 @@ def test_a_start_in_the_margin_leaves_it_by_turning_on_the_spot_and_driving_stra
     assert kept.points_free(result.states[2:, :2]).all()
 
 
+def test_a_goal_in_the_margin_is_reached_along_its_leg_within_the_goal_radius():
+    """The goal region is centred on the end of the goal's leg, 0.58 m from the goal; the
+    plan drives from the state reached there straight to that point and along the leg, so
+    it ends on the goal asked for, not up to 1.08 m from it."""
+    margin, settings = 0.6, KinoSettings(seed=3)
+    goal = np.array([10 - MODEL.radius - CHORD_TOLERANCE - 0.05, 9.0])  # 0.05 m in
+    with pytest.warns(PlanningWarning, match=r"goal \(9.74, 9\) is inside the 0.6 m"):
+        result = plan_diffdrive(WALLS, START, goal, settings, MODEL, margin=margin)
+    assert result.solved
+    assert np.array_equal(result.states[-1, :2], goal)
+    assert result.closing_controls >= 1 and result.goal_leg_controls >= 1
+    tail = result.closing_controls + result.goal_leg_controls
+    reached, leg_end = result.states[-1 - tail], result.states[-1 - result.goal_leg_controls]
+    assert np.linalg.norm(leg_end[:2] - goal) > settings.goal_radius  # the region's centre
+    assert np.linalg.norm(reached[:2] - leg_end[:2]) <= settings.goal_radius
+    following = propagate(result.states[:-1], result.controls, result.durations)
+    assert np.allclose(following[:, :2], result.states[1:, :2], atol=1e-9)
+    # Up to the leg the robot keeps radius + margin from every rectangle and the boundary.
+    kept = WALLS.inflate(MODEL.radius + margin)
+    drive = np.linspace(reached[:2], leg_end[:2], 200)
+    assert kept.points_free(np.vstack([result.states[:-result.goal_leg_controls, :2],
+                                       drive])).all()
+
+
 def test_chord_tolerance_is_part_of_the_clearance():
     """A start just outside the radius, but inside the chord tolerance, is refused."""
     x = 3 - MODEL.radius - 0.5 * CHORD_TOLERANCE

@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 
 from quadnav.cli.main import main
-from quadnav.errors import QuadnavError
+from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import plan_quadrotor
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
-from quadnav.kinoflight import STOP_ACCELERATION, fly_kino_plan, plan_trajectory
+from quadnav.kinoflight import fly_kino_plan, plan_trajectory
 from quadnav.runs import read_run
+from quadnav.sim.settings import SimSettings
 from quadnav.world import World, load_world
 
 MODEL = SampledQuadrotor()
@@ -31,28 +32,22 @@ def _plan(world_spec: str, seed: int, start=None, **budget):
     return world.replace(start=start, margin=0.2), result, settings
 
 
-def test_the_trajectory_is_the_plan_then_a_straight_stop():
-    _, result, _ = _plan("forest", 3)
+def test_the_trajectory_is_the_plan_ending_at_rest_at_the_goal():
+    world, result, _ = _plan("forest", 3)
     trajectory = plan_trajectory(result, MODEL)
     times = np.concatenate([[0.0], np.cumsum(result.durations)])
-    assert np.allclose(trajectory.breaks[:-1], times, atol=1e-12)
+    assert np.allclose(trajectory.breaks, times, atol=1e-12)
     assert np.abs(trajectory.position(times) - result.states[:, :3]).max() < 1e-9
-    assert np.abs(trajectory.velocity(times[:-1]) - result.states[:-1, 3:]).max() < 1e-9
+    assert np.abs(trajectory.velocity(times) - result.states[:, 3:]).max() < 1e-9
     middles = times[:-1] + 0.5 * result.durations  # each control's own acceleration
     planned = np.array([MODEL.acceleration(control) for control in result.controls])
     assert np.abs(trajectory.acceleration(middles) - planned).max() < 1e-9
-    end_velocity = result.states[-1, 3:]
-    speed = np.linalg.norm(end_velocity)
-    assert speed > 0.1  # the plan ends moving ...
-    stop_time = trajectory.duration - times[-1]
-    braking = trajectory.acceleration(times[-1] + 0.5 * stop_time)
-    assert np.allclose(np.cross(braking, end_velocity), 0.0, atol=1e-9)
-    assert braking @ end_velocity < 0 and np.linalg.norm(braking) <= STOP_ACCELERATION
-    assert MODEL.control_for(braking) is not None
-    assert stop_time == pytest.approx(speed / np.linalg.norm(braking))
-    assert np.allclose(trajectory.velocity(trajectory.duration - 1e-9), 0.0, atol=1e-6)
-    stopped = trajectory.position(trajectory.duration)  # ... and stops straight ahead
-    assert np.allclose(stopped - result.states[-1, :3], 0.5 * end_velocity * stop_time)
+    # The last two controls are the closing stop: from the goal region to rest at the goal.
+    assert np.linalg.norm(result.states[-3, 3:]) > 0.1  # the tree reaches it moving ...
+    assert np.allclose(trajectory.position(trajectory.duration), world.goal, rtol=0,
+                       atol=1e-12)  # ... and the trajectory stops exactly on the goal
+    assert np.allclose(trajectory.velocity(trajectory.duration), 0.0, atol=1e-12)
+    assert trajectory.info["stop_s"] == pytest.approx(result.durations[-2:].sum())
 
 
 def test_the_leg_out_of_the_margin_is_the_trajectorys_start_leg():
@@ -66,18 +61,57 @@ def test_the_leg_out_of_the_margin_is_the_trajectorys_start_leg():
     assert metrics["trajectory_leg_margin_m"] < 0.2 <= metrics["trajectory_margin_m"] + 1e-9
 
 
-def test_a_plan_whose_stop_would_reach_a_block_is_refused():
-    """A plan that ends moving at 2 m/s towards a wall 0.5 m ahead: the stop needs 0.67 m."""
-    world = World(np.array([0.0, 0, 0, 10, 10, 5]), np.array([[2.5, 0, 0, 4, 10, 5]]),
-                  margin=0.1)
-    states = np.array([[1.0, 5, 2, 0, 0, 0], [2.0, 5, 2, 2, 0, 0]])  # 1 m at 2 m/s^2
-    result = KinoResult("quadrotor", True, states, [MODEL.control_for([2.0, 0, 0])], [1.0],
-                        states, [-1, 0], np.zeros((2, 3)), [0.0, 1.0], 1, 0.0, 0.0, 0)
-    with pytest.raises(QuadnavError, match=r"ends at \(2, 5, 2\) moving at 2.00 m/s, and "
-                                           r"the 0.67 m it needs to stop do not keep the "
-                                           r"0.1 m margin"):
-        plan_trajectory(result, MODEL, world)
-    assert plan_trajectory(result, MODEL, world.replace(blocks=np.zeros((0, 6)), colors=None)).duration > 1
+def test_a_goal_in_the_margin_is_reached_by_its_leg_after_the_closing_stop():
+    world = load_world("forest")
+    goal = np.array([19.9, 19.9, 3.0])  # 0.1 m from two walls
+    with pytest.warns(PlanningWarning, match=r"goal \(19.9, 19.9, 3\) is inside the 0.22 m"):
+        result = plan_quadrotor(world, world.start, goal, KinoSettings(), MODEL, 0.2)
+    assert result.solved and result.closing_controls == 2 and result.goal_leg_controls >= 2
+    assert np.array_equal(result.states[-1], [*goal, 0, 0, 0])
+    trajectory = plan_trajectory(result, MODEL)
+    assert trajectory.leg_segments == (0, result.goal_leg_controls)
+    flown = fly_kino_plan(world.replace(goal=goal, margin=0.2), result, MODEL, KinoSettings())
+    metrics = flown.metrics()
+    assert metrics["success"] and metrics["reached_goal"]
+    assert np.linalg.norm(flown.flight.position[-1] - goal) < 0.1  # radius 0.5 m
+    assert metrics["trajectory_leg_margin_m"] < 0.2 <= metrics["trajectory_margin_m"] + 1e-9
+
+
+def test_a_plan_that_does_not_end_at_rest_at_the_goal_is_not_flown():
+    """The planner ends every plan at rest on the goal; a plan from elsewhere that does not
+    is refused, not flown to wherever it stops."""
+    world = World(np.array([0.0, 0, 0, 10, 10, 5]), np.zeros((0, 6)), start=[1.0, 5, 2],
+                  goal=[3.0, 5, 2], margin=0.1)
+    moving = np.array([[1.0, 5, 2, 0, 0, 0], [2.0, 5, 2, 2, 0, 0]])  # 1 m at 2 m/s^2
+    result = KinoResult("quadrotor", True, moving, [MODEL.control_for([2.0, 0, 0])], [1.0],
+                        moving, [-1, 0], np.zeros((2, 3)), [0.0, 1.0], 1, 0.0, 0.0, 0)
+    with pytest.raises(QuadnavError, match=r"the plan ends at \(2, 5, 2\) moving at "
+                                           r"2.00 m/s; a plan to fly must end at rest"):
+        fly_kino_plan(world, result, MODEL, KinoSettings())
+    resting = np.array([[1.0, 5, 2, 0, 0, 0], [1.25, 5, 2, 1, 0, 0], [1.5, 5, 2, 0, 0, 0]])
+    controls = [MODEL.control_for([2.0, 0, 0]), MODEL.control_for([-2.0, 0, 0])]
+    result = KinoResult("quadrotor", True, resting, controls, [0.5, 0.5], resting,
+                        [-1, 0, 1], np.zeros((3, 3)), [0.0, 0.5, 0.5], 1, 0.0, 0.0, 0)
+    with pytest.raises(QuadnavError, match=r"the plan ends at \(1.5, 5, 2\), not at the "
+                                           r"goal \(3, 5, 2\)"):
+        fly_kino_plan(world, result, MODEL, KinoSettings())
+    assert fly_kino_plan(world.replace(goal=[1.5, 5, 2]), result, MODEL,
+                         KinoSettings()).success
+
+
+def test_a_flight_that_ends_outside_the_goal_tolerance_is_not_reached():
+    """Judged against the goal asked for: with a 1 mm tolerance the flight, which ends a
+    few millimetres from the goal, has not reached it, and says so."""
+    world, result, settings = _plan("forest", 0)
+    flown = fly_kino_plan(world, result, MODEL, settings, settings=SimSettings(
+        goal_tolerance=0.001))
+    metrics = flown.metrics()
+    distance = float(np.linalg.norm(flown.flight.position[-1] - world.goal))
+    assert 0.002 < distance < 0.05
+    assert metrics["final_error_m"] == pytest.approx(distance, abs=1e-9)
+    assert metrics["ending"] == "completed"
+    assert not metrics["reached_goal"] and not metrics["success"] and not flown.success
+    assert metrics["goal_tolerance_m"] == 0.001
 
 
 @pytest.mark.parametrize("world_spec", ["empty", "forest"])
@@ -89,6 +123,11 @@ def test_plans_on_the_built_in_worlds_fly_closed_loop_over_ten_seeds(world_spec)
         flown = fly_kino_plan(world, result, MODEL, settings)
         metrics = flown.metrics()
         assert metrics["success"], (seed, metrics["ending"], metrics["final_error_m"])
+        # Judged against the goal asked for, with the goal radius, and well inside it.
+        assert metrics["goal_tolerance_m"] == settings.goal_radius == 0.5
+        distance = float(np.linalg.norm(flown.flight.position[-1] - world.goal))
+        assert metrics["reached_goal"] and distance < 0.05
+        assert metrics["final_error_m"] == pytest.approx(distance, abs=1e-9)
         assert not metrics["collision"]
         assert metrics["min_clearance_m"] is None or metrics["min_clearance_m"] > 0.05
         assert 0.01 < metrics["rms_tracking_error_m"] < 0.08
@@ -113,6 +152,31 @@ def test_kino_fly_writes_the_run_folder_fly_writes(tmp_path, capsys):
     assert len(run.tree_nodes) == kino["nodes"]
     for name in ("flight_3d.png", "tracking_error.png", "report.html"):
         assert (out / "flight" / name).stat().st_size > 1000
+
+
+@pytest.mark.parametrize("which", ["forest", "test_window"])
+def test_kino_fly_ends_within_the_goal_radius_of_the_goal_asked_for(which, tmp_path, capsys,
+                                                                     request):
+    """The flights a user found stopping 0.58 m (forest) and 0.81 m (test_window) from the
+    goal, reported as reaching it: the closing stop now ends on the goal, and the verdict
+    is the distance from it."""
+    spec = ("forest" if which == "forest" else
+            str(request.getfixturevalue("shared_maps") / "meam620" / "test_window.json"))
+    goal = load_world(spec).goal
+    out = tmp_path / "kino"
+    code = main(["kino", "quadrotor", spec, "--fly", "--quiet", "-o", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    run = read_run(out / "flight")
+    distance = float(np.linalg.norm(run.flight.position[-1] - goal))
+    assert distance < 0.05  # the goal radius is 0.5 m
+    assert "success" in printed and "s stop at the goal)" in printed
+    metrics = run.metrics
+    assert metrics["goal"] == goal.tolist() and metrics["goal_tolerance_m"] == 0.5
+    assert metrics["reached_goal"] and metrics["success"]
+    assert metrics["final_error_m"] == pytest.approx(distance, abs=1e-6)
+    assert metrics["goal_distance_m"] == pytest.approx(distance, abs=1e-6)
+    assert json.loads((out / "kino.json").read_text())["flight"]["reached_goal"]
 
 
 def test_a_bad_vehicle_file_is_refused_before_planning(tmp_path, capsys):

@@ -15,6 +15,7 @@ from figurecheck import assert_labels_apart, assert_legends_outside, assert_outl
 
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.kinodynamic import KinoResult, KinoSettings
+from quadnav.kinodynamic.closing import CLOSING_ACCELERATION
 from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.quadrotor import (
     CHORD_TOLERANCE,
@@ -157,8 +158,15 @@ def _check_plan(world: World, result: KinoResult, start, goal, settings=SETTINGS
     assert result.solved, result.message
     assert result.planner == "quadrotor"
     assert np.array_equal(result.states[0], [*start, 0, 0, 0])
-    assert np.linalg.norm(result.states[-1, :3] - goal) <= settings.goal_radius
-    assert np.allclose(result.durations, settings.duration)
+    # The tree reaches the goal region; the closing stop from there ends at rest exactly
+    # at the goal, in two pieces of equal duration.
+    assert result.closing_controls == 2 and result.goal_leg_controls == 0
+    assert np.linalg.norm(result.states[-3, :3] - goal) <= settings.goal_radius
+    assert np.array_equal(result.states[-1], [*goal, 0, 0, 0])
+    assert np.allclose(result.durations[:-2], settings.duration)
+    assert result.durations[-2] == result.durations[-1]
+    assert np.linalg.norm(MODEL.acceleration(result.controls[-2:]), axis=1).max() \
+        <= CLOSING_ACCELERATION + 1e-9
     following = MODEL.propagate(result.states[:-1], result.controls, result.durations)
     assert np.allclose(following, result.states[1:], rtol=0, atol=1e-12)
     assert np.all((result.controls >= MODEL.control_lower)
@@ -213,6 +221,28 @@ def test_every_tree_edge_is_free_slow_and_above_the_floor(which, forest, forest_
     assert positions[..., 2].min() > floor
     assert result.tree_states[:, 2].min() > floor
     assert np.linalg.norm(velocities, axis=2).max() <= MODEL.speed_limit + 1e-12
+
+
+def test_the_closing_stop_is_checked_like_every_motion():
+    """A goal 0.4 m behind a wall, with a 1.5 m goal region: the tree reaches the region on
+    the near side of the wall first, but no closing stop through the wall is taken; the
+    plan closes from the far side, and its stop keeps the margin along its exact motion."""
+    world = World(boundary=[0, 0, 0, 10, 10, 4], blocks=[[5, 0, 0, 5.2, 7, 4]])
+    goal = np.array([5.6, 5.0, 2.0])
+    settings = SETTINGS.replace(goal_radius=1.5)
+    result = plan_quadrotor(world, (1.0, 5.0, 2.0), goal, settings, MODEL, MARGIN)
+    _check_plan(world, result, (1.0, 5.0, 2.0), goal, settings)
+    near_side = result.tree_states[(result.tree_states[:, 0] < 5)
+                                   & (np.linalg.norm(result.tree_states[:, :3] - goal, axis=1)
+                                      <= settings.goal_radius)]
+    refused = int(re.search(r"(\d+) states in the goal region with no free closing stop",
+                            result.message)[1])
+    assert len(near_side) > 0 and refused >= len(near_side)
+    assert result.states[-3, 0] > 5.2 + MARGIN
+    stop = exact_positions(result.states[-3:-1], MODEL.acceleration(result.controls[-2:]),
+                           np.linspace(0, 1, 200) * result.durations[-2:, None])
+    assert world.inflate(MARGIN).points_free(stop.reshape(-1, 3)).all()
+    assert stop[..., 2].min() > MARGIN
 
 
 def test_floor_prunes_motions_that_would_dip_below_it():
@@ -276,11 +306,18 @@ def test_biased_sampling_reaches_the_goal_in_fewer_iterations(forest):
     assert np.median(counts[True]) < np.median(counts[False])
 
 
-def test_start_inside_the_goal_region_is_solved_at_once(forest):
-    result = plan_quadrotor(forest, forest.start, np.add(forest.start, [0.1, 0, 0]), SETTINGS)
-    assert result.solved and result.iterations == 0
-    assert result.states.shape == (1, 6) and result.controls.shape == (0, 3)
-    assert result.time_to_goal == 0.0
+def test_start_inside_the_goal_region_is_solved_at_once_by_the_closing_stop(forest):
+    goal = np.add(forest.start, [0.1, 0, 0])
+    result = plan_quadrotor(forest, forest.start, goal, SETTINGS)
+    assert result.solved and result.iterations == 0 and len(result.tree_states) == 3
+    assert result.states.shape == (3, 6) and result.controls.shape == (2, 3)
+    assert np.array_equal(result.states[-1], [*goal, 0, 0, 0])
+    # From rest to rest straight along x: accelerating, then braking as hard.
+    accelerations = MODEL.acceleration(result.controls)
+    assert np.allclose(accelerations[:, 1:], 0, atol=1e-12)
+    assert accelerations[0, 0] == pytest.approx(-accelerations[1, 0])
+    assert 0 < accelerations[0, 0] <= CLOSING_ACCELERATION
+    assert result.time_to_goal is not None
 
 
 def test_budget_exhausted_is_an_unsolved_result(forest):

@@ -5,16 +5,16 @@ A plan of :func:`~quadnav.kinodynamic.quadrotor.plan_quadrotor` holds each sampl
 acceleration on each: its positions are exactly a piecewise quadratic of time.
 :func:`plan_trajectory` writes them as a :class:`~quadnav.trajectory.model.Trajectory`
 (a degree-2 PPoly through the planned states, the plan's own positions and velocities at
-every break). The plan reaches the goal region still moving, so the trajectory ends with
-a straight stop along the last velocity, as hard as the model's tilt and thrust limits
-allow (at most :data:`STOP_ACCELERATION`); the stop is checked exactly against the map
-inflated by the margin, and a plan whose stop would not keep it is refused.
+every break). The plan ends with its closing stop, planned and checked against the map
+like every other motion of it, at rest exactly at the goal (and, for a goal inside the
+margin, with the leg into it), so the trajectory ends there too.
 :func:`fly_kino_plan` flies that trajectory through
 :func:`~quadnav.sim.simulate.simulate` with any registered controller, in the real map
 with its exact contact checks, and measures it as a ``fly`` mission is measured
 (:func:`~quadnav.mission.measure_flight`: tracking errors, the margin kept by the
 trajectory and by the flight, the rotors' energy), so the two pipelines compare on
-success, time and energy.
+success, time and energy. The flight is judged against the goal asked for: it reached the
+goal when it ended within the goal tolerance of it, by default the planner's goal radius.
 
 The acceleration steps where one control follows another, which a vehicle can only
 follow after its attitude has turned (about 80 ms for the Tello's attitude loop), so the
@@ -47,87 +47,40 @@ from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
-#: Largest deceleration of the stop that ends the trajectory, m/s^2 (the default model
-#: brakes at up to 3.6 m/s^2 horizontally, g tan 0.35 rad).
-STOP_ACCELERATION = 3.0
-#: Bisection steps of :func:`stop_acceleration`: the rate is found to 3 m/s^2 / 2^30.
-STOP_BISECTIONS = 30
 #: ``Trajectory.method`` of a kinodynamic plan.
 METHOD = "kinodynamic"
+#: How far, m, the plan may end from the goal of the map flown, and how fast, m/s (the
+#: planner ends it exactly there, at rest).
+END_TOLERANCE = 1e-9
 
 
-def stop_acceleration(model: SampledQuadrotor, velocity: np.ndarray) -> np.ndarray:
-    """The constant acceleration (3,), m/s^2, that stops a point moving at ``velocity``
-    (3,) m/s straight: against it, the largest rate up to :data:`STOP_ACCELERATION` that
-    ``model`` can fly (the accelerations it can fly form a convex set around 0, so along
-    one direction they are an interval, found by bisection); zeros at rest."""
-    speed = float(np.linalg.norm(velocity))
-    if speed == 0.0:
-        return np.zeros(3)
-    direction = -np.asarray(velocity, dtype=np.float64) / speed
-    low, high = 0.0, STOP_ACCELERATION
-    if model.control_for(high * direction) is not None:
-        return high * direction
-    for _ in range(STOP_BISECTIONS):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if model.control_for(middle * direction) is not None else (
-            low, middle)
-    return low * direction
-
-
-def plan_trajectory(result: KinoResult, model: SampledQuadrotor,
-                    world: World | None = None) -> Trajectory:
-    """The solved plan ``result`` (states (K, 6) position m and velocity m/s) as a
-    piecewise quadratic trajectory: on each control, ``p + v t + a t^2 / 2`` with the
-    constant acceleration that takes the state's velocity to the next one's, then the
-    straight stop (:func:`stop_acceleration`). Its breaks are the planned states' times
-    and the end of the stop; the yaw is the model's fixed one; the leg out of the margin
-    (``result.leg_controls``) is marked as the trajectory's start leg.
+def plan_trajectory(result: KinoResult, model: SampledQuadrotor) -> Trajectory:
+    """The solved plan ``result`` (states (K, 6) position m and velocity m/s, ending at
+    rest) as a piecewise quadratic trajectory: on each control, ``p + v t + a t^2 / 2``
+    with the constant acceleration that takes the state's velocity to the next one's. Its
+    breaks are the planned states' times; the yaw is the model's fixed one; the leg out of
+    the margin (``result.leg_controls``) and the leg into it
+    (``result.goal_leg_controls``) are marked as the trajectory's legs.
 
     Raises:
-        QuadnavError: no plan, or the stop comes closer to a block or the boundary of
-            ``world`` than its ``margin`` (checked exactly on the stop's segment).
+        QuadnavError: no plan, or one that does not end at rest.
     """
     if not result.solved:
         raise QuadnavError(f"no plan to fly: {result.message}")
     positions, velocities, durations = result.states[:, :3], result.states[:, 3:], result.durations
+    if np.linalg.norm(velocities[-1]) > END_TOLERANCE:
+        raise QuadnavError(f"the plan ends at {format_point(positions[-1])} moving at "
+                           f"{np.linalg.norm(velocities[-1]):.2f} m/s; a plan to fly must "
+                           "end at rest")
     accelerations = np.diff(velocities, axis=0) / durations[:, None]
-    end_velocity = velocities[-1]
-    end_speed = float(np.linalg.norm(end_velocity))
-    stop = stop_acceleration(model, end_velocity)
-    stop_time = end_speed / float(np.linalg.norm(stop)) if stop.any() else 0.0
-    pieces = [(accelerations, velocities[:-1], positions[:-1], durations)]
-    if stop_time > 0.0:
-        stopped = positions[-1] + 0.5 * end_velocity * stop_time
-        _check_stop(world, positions[-1], stopped, end_speed)
-        pieces.append((stop[None], end_velocity[None], positions[-1][None],
-                       np.array([stop_time])))
-        waypoints = np.vstack([positions, stopped])
-    else:
-        waypoints = positions
-    acceleration, velocity, position, duration = (np.concatenate(part) for part in
-                                                  zip(*pieces, strict=True))
-    coefficients = np.stack([0.5 * acceleration, velocity, position])  # (3, pieces, 3)
-    breaks = np.concatenate([[0.0], np.cumsum(duration)])
-    return Trajectory(PPoly(coefficients, breaks), waypoints, METHOD,
+    coefficients = np.stack([0.5 * accelerations, velocities[:-1], positions[:-1]])
+    breaks = np.concatenate([[0.0], np.cumsum(durations)])
+    closing = slice(len(durations) - result.closing_controls - result.goal_leg_controls, None)
+    return Trajectory(PPoly(coefficients, breaks), positions, METHOD,
                       yaw_mode=YawMode.CONSTANT, yaw0=model.yaw,
-                      info={"controls": len(durations), "stop_s": stop_time,
-                            "stop_acceleration_m_s2": float(np.linalg.norm(stop))},
-                      leg_segments=(result.leg_controls, 0))
-
-
-def _check_stop(world: World | None, end: np.ndarray, stopped: np.ndarray,
-                speed: float) -> None:
-    """Refuse a stop from ``end`` to ``stopped`` (3,) m that leaves ``world`` inflated by
-    its margin (nothing to check without a world)."""
-    if world is None:
-        return
-    margin = world.margin or 0.0
-    if not world.inflate(margin).segment_free(end, stopped):
-        raise QuadnavError(
-            f"the plan ends at {format_point(end)} moving at {speed:.2f} m/s, and the "
-            f"{np.linalg.norm(stopped - end):.2f} m it needs to stop do not keep the "
-            f"{margin:g} m margin; plan again with another --seed")
+                      info={"controls": len(durations),
+                            "stop_s": float(durations[closing].sum())},
+                      leg_segments=(result.leg_controls, result.goal_leg_controls))
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,7 +113,9 @@ class KinoFlight:
 
     @property
     def success(self) -> bool:
-        """The flight ran to the end with no contact and stopped where the plan stops."""
+        """The flight ran to the end with no contact and ended within
+        ``settings.goal_tolerance`` of the goal asked for, ``world.goal`` (where the plan
+        ends: :func:`fly_kino_plan` checks it)."""
         return flight_succeeded(self.flight, self.settings.goal_tolerance)
 
     def metrics(self) -> dict:
@@ -222,17 +177,23 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         vehicle: the simulated quadrotor (default: the ``tello`` preset, the 80 g vehicle
             the default model stands for).
         gains: the cascade's gains (default: those tuned for the vehicle).
-        settings: rates, goal tolerance, disturbances, seed.
+        settings: rates, goal tolerance, disturbances, seed (default: the defaults with
+            the goal tolerance ``search.goal_radius``).
         controller: a name of :data:`~quadnav.control.registry.CONTROLLERS`.
         progress: called with the fraction of the flight simulated.
 
     Raises:
-        QuadnavError: the plan's stop would not keep the margin (:func:`plan_trajectory`).
+        QuadnavError: no plan, or one that does not end at rest at ``world.goal``.
     """
     vehicle = vehicle or load_params()
     gains = gains or load_gains(preset=vehicle.gains)
-    settings = settings or SimSettings()
-    trajectory = plan_trajectory(result, model, world)
+    settings = settings or SimSettings(goal_tolerance=search.goal_radius)
+    trajectory = plan_trajectory(result, model)
+    end = trajectory.position(trajectory.duration)
+    if world.goal is None or np.linalg.norm(end - world.goal) > END_TOLERANCE:
+        raise QuadnavError(f"the plan ends at {format_point(end)}, not at the goal "
+                           f"{'(none)' if world.goal is None else format_point(world.goal)} "
+                           f"of {world.name}")
     flight = simulate(trajectory, vehicle, gains, world, settings, progress,
                       controller=CONTROLLERS.get(controller)(gains))
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,

@@ -96,7 +96,7 @@ KINO_FILES = ("kino.json", *PLAN_FILES, "kino.png", "controls.png", COMPARE_FIGU
 #: The run folder of ``kino quadrotor --fly``, inside the output folder.
 FLIGHT_FOLDER = "flight"
 #: The flight's figures copied into kino.json (all of them are in flight/metrics.json).
-FLIGHT_KEYS = ("success", "ending", "flight_time_s", "rms_tracking_error_m",
+FLIGHT_KEYS = ("success", "reached_goal", "ending", "flight_time_s", "rms_tracking_error_m",
                "max_tracking_error_m", "final_error_m", "min_clearance_m", "flight_margin_m",
                "rotor_energy_j")
 #: Largest deviation, m, of the wheel tracks in tracks.csv from the true wheel paths.
@@ -363,7 +363,8 @@ def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
 
     with fraction_bar("fly", args.quiet) as progress:
         return fly_kino_plan(world, result, model, settings, vehicle, gains,
-                             SimSettings(seed=settings.seed), args.controller, progress)
+                             SimSettings(seed=settings.seed, goal_tolerance=settings.goal_radius),
+                             args.controller, progress)
 
 
 def write_flight(flown: KinoFlight, folder: Path) -> int:
@@ -381,8 +382,8 @@ def write_flight(flown: KinoFlight, folder: Path) -> int:
     written = write_run(content, folder)
     print(f"flown closed loop by the {flown.controller} controller on the {m['vehicle']} "
           f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
-          f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, then a "
-          f"{m['stop_s']:.2f} s stop)")
+          f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, ending with a "
+          f"{m['stop_s']:.2f} s stop at the goal)")
     print(f"  {tracking_errors(m)}; {min_clearance(m)}")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
@@ -468,9 +469,11 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
                     "positions and velocities, DIR/controls.csv phi, theta (rad) and thrust "
                     "(N); kino.json also gives how closely the controls replayed through "
                     "the point-mass model reproduce the planned positions (to round-off). "
-                    "--fly also flies the plan closed loop (its states as the reference, "
-                    "then a straight stop) on the simulated vehicle, as quadnav fly "
-                    "flies a trajectory, and writes that run folder to DIR/flight.")
+                    "The plan ends with a stop planned exactly onto the goal. --fly also "
+                    "flies it closed loop (its states as the reference) on the simulated "
+                    "vehicle, as quadnav fly flies a trajectory, judges it reached when it "
+                    "ends within --goal-radius of the goal, and writes that run folder to "
+                    "DIR/flight.")
     add_map_argument(p)
     add_start_goal_arguments(p, file=False)
     add_margin_argument(p)

@@ -220,13 +220,15 @@ def _check_end(world: World2D, free: World2D, point: FloatArray, label: str,
 
 def check_query(world: World2D, start: ArrayLike, goal: ArrayLike, model: DiffDrive,
                 margin: float) -> tuple[World2D, FloatArray, FloatArray, FloatArray]:
-    """The world the search runs in, the start (3,), the goal (2,) and the start's leg.
+    """The world the search runs in, the start (3,), the start's leg (K, 2) and the goal's
+    (J, 2).
 
     The search world is ``world`` inflated by ``radius + margin + CHORD_TOLERANCE``. A
     start or goal whose footprint (the disc plus the tolerance) crosses the boundary or a
     rectangle is a QuadnavError naming it; one inside the margin is usable, as for every
     planner (:func:`quadnav.planning.legs.find_leg`): the robot leaves the margin by its
-    leg (K, 2), and for a goal inside it the goal region is centred on the end of its leg.
+    leg, from the start out of the margin, and enters it by the goal's, from a point that
+    keeps the margin to the goal; a free start's or goal's leg is just the point.
     """
     start = np.array(start, dtype=np.float64)
     goal = np.array(goal, dtype=np.float64)
@@ -248,7 +250,7 @@ def check_query(world: World2D, start: ArrayLike, goal: ArrayLike, model: DiffDr
     start_leg, goal_leg = (_leg(body, margin, point, label) for point, label in (
         (start[:2], "start"), (goal, "goal")))
     start[2] = wrap_angle(start[2])
-    return free, start, goal_leg[-1], start_leg
+    return free, start, start_leg, goal_leg[::-1]
 
 
 def _leg(body: World2D, margin: float, point: FloatArray, label: str) -> FloatArray:
@@ -324,6 +326,11 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
     model's limits, integrates each for ``settings.duration`` exactly, drops those whose
     motion collides, and adds the end nearest the target. The search stops when a state
     lies within ``settings.goal_radius`` of the goal or the iteration or time budget ends.
+    For a goal inside the margin, the goal region is centred on the end of its leg (the
+    nearest point that keeps the margin), and the plan ends by driving straight from the
+    state reached there to that point (when the drive is free; else the search goes on)
+    and along the leg into the goal (:func:`leg_motions`), so every plan ends within the
+    goal radius of the goal asked for.
 
     Args:
         world: the map, rectangles not inflated.
@@ -339,15 +346,17 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
         ``(v, omega)``, durations (K - 1,), and the whole tree.
     """
     model = model or DiffDrive()
-    free, start, goal, leg = check_query(world, start, goal, model, margin)
+    free, start, leg, goal_leg = check_query(world, start, goal, model, margin)
+    goal = goal_leg[0]
     clock = time.perf_counter()
     rng = np.random.default_rng(settings.seed)
     motions = leg_motions(model, float(start[2]), leg)
     tree = ControlTree(start, 2, capacity=settings.max_iterations + 1 + len(motions))
     for state, control, duration in motions:
         tree.add(tree.size - 1, state, control, duration)
+    closing = _Closing(free, model, goal_leg)
     closest = float(np.hypot(*(tree.states[tree.size - 1, :2] - goal)))
-    reached = tree.size - 1 if closest <= settings.goal_radius else -1
+    reached = closing(tree, tree.size - 1) if closest <= settings.goal_radius else -1
     iterations, reported = 0, 0.0
     elapsed = time.perf_counter() - clock
     while reached < 0 and iterations < settings.max_iterations and elapsed < settings.time_limit:
@@ -364,30 +373,65 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
             distance = float(np.hypot(*(ends[best, :2] - goal)))
             closest = min(closest, distance)
             if distance <= settings.goal_radius:
-                reached = node
+                reached = closing(tree, node)
         elapsed = time.perf_counter() - clock
         if progress is not None and elapsed - reported >= PROGRESS_SECONDS:
             reported = elapsed
             progress(settings.budget_used(iterations, elapsed), closest)
     if progress is not None:
         progress(1.0 if reached < 0 else settings.budget_used(iterations, elapsed), closest)
-    return _result(tree, reached, settings, iterations, time.perf_counter() - clock, closest)
+    return _result(tree, reached, settings, iterations, time.perf_counter() - clock, closest,
+                   closing)
+
+
+class _Closing:
+    """The end of a plan into a goal inside the margin: from a state in the goal region,
+    straight to the end of the goal's leg and along the leg (nothing for a free goal).
+
+    ``controls`` counts the motions of the last drive to the leg's end, ``leg_controls``
+    those along the leg, ``blocked`` the states whose drive was not free.
+    """
+
+    def __init__(self, free: World2D, model: DiffDrive, goal_leg: FloatArray) -> None:
+        self.free, self.model, self.goal_leg = free, model, goal_leg
+        self.controls = self.leg_controls = self.blocked = 0
+
+    def __call__(self, tree: ControlTree, node: int) -> int:
+        """Add the end of the plan after vertex ``node``; the last vertex, or -1 when the
+        drive to the leg's end is not free."""
+        if len(self.goal_leg) == 1:
+            return node
+        begin = tree.states[node]
+        drive = np.array([[begin[:2], self.goal_leg[0]]])
+        if not self.free.segments_free(drive)[0]:
+            self.blocked += 1
+            return -1
+        to_leg = leg_motions(self.model, float(begin[2]), drive[0])
+        along = leg_motions(self.model, float(to_leg[-1][0][2]), self.goal_leg)
+        self.controls, self.leg_controls = len(to_leg), len(along)
+        for state, control, duration in (*to_leg, *along):
+            node = tree.add(node, state, control, duration)
+        return node
 
 
 def _result(tree: ControlTree, reached: int, settings: KinoSettings, iterations: int,
-            seconds: float, closest: float) -> KinoResult:
+            seconds: float, closest: float, closing: _Closing) -> KinoResult:
     whole = tree.arrays()
+    blocked = (f"; {closing.blocked} states in the goal region could not drive to its "
+               "centre" if closing.blocked else "")
     if reached < 0:
         return KinoResult(NAME, False, np.zeros((0, 3)), np.zeros((0, 2)), np.zeros(0),
                           *whole, iterations, seconds, None, settings.seed,
                           f"goal region not reached in {iterations} iterations "
                           f"({seconds:.3g} s); the closest state is {closest:.3g} m from the "
-                          "goal")
+                          f"goal{blocked}")
     rows = tree.branch(reached)
     return KinoResult(NAME, True, tree.states[rows], tree.controls[rows[1:]],
                       tree.durations[rows[1:]], *whole, iterations, seconds, seconds,
                       settings.seed, f"goal region reached in {iterations} iterations "
-                      f"({seconds:.3g} s), {len(rows) - 1} controls")
+                      f"({seconds:.3g} s), {len(rows) - 1} controls{blocked}",
+                      closing_controls=closing.controls,
+                      goal_leg_controls=closing.leg_controls)
 
 
 # ------------------------------------------------------------------------ outputs

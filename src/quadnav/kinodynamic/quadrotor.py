@@ -1,7 +1,8 @@
 """Kinodynamic RRT for a quadrotor steered by sampled roll, pitch and thrust (3D).
 
 :func:`plan_quadrotor` grows a tree of states ``(x, y, z, vx, vy, vz)`` from the start,
-at rest, until a state's position is within ``goal_radius`` of the goal. Each iteration:
+at rest, until a state's position is within ``goal_radius`` of the goal and a closing
+stop from it to rest exactly at the goal is free (see below). Each iteration:
 
 1. **Sample** a point: with ``settings.biased`` and probability ``goal_bias``, from a
    Gaussian around the goal whose standard deviation is :data:`GOAL_SPREAD` times the
@@ -16,6 +17,12 @@ at rest, until a state's position is within ``goal_radius`` of the goal. Each it
    faster than the speed limit (``|v + a s|`` is convex in ``s``, so the speed along a
    motion never exceeds its larger end speed) or collide, and add the survivor whose
    end is nearest the sample.
+4. **Close**: from a new state inside the goal region, the closing stop: two constant
+   accelerations, each held for the same time, that bring it to rest exactly at the goal
+   (:func:`~quadnav.kinodynamic.closing.closing_candidates`: the shortest the model can
+   fly within its limits and speed limit that stays above the floor and free, checked as
+   every motion is). The plan ends with it, so a flight of the plan ends at the goal,
+   not merely near it; when no candidate is free the search goes on.
 
 Collision guarantee: every motion is cut into equal pieces (see
 :meth:`~quadnav.kinodynamic.pointmass.SampledQuadrotor.chord_pieces`) whose chords are
@@ -40,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
+from quadnav.kinodynamic.closing import closing_candidates
 from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions, exact_states
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
@@ -98,13 +106,15 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
                    model: SampledQuadrotor | None = None, margin: float = 0.2,
                    progress: Progress | None = None) -> KinoResult:
     """Plan a flight from ``start`` (at rest) into the ball of ``settings.goal_radius``
-    around ``goal`` by kinodynamic RRT (see the module docstring).
+    around ``goal`` and on to rest exactly at ``goal`` by kinodynamic RRT (see the module
+    docstring).
 
     Starts and goals are checked as every planner checks them
     (:func:`~quadnav.planning.make_problem`, with the margin plus the chord tolerance): one
     inside the margin is left by its leg, flown straight from rest to rest
     (:func:`leg_motions`) before the tree grows; for a goal inside it, the goal region is
-    centred on the end of its leg, the nearest point that keeps the margin.
+    centred on the end of its leg, the nearest point that keeps the margin, the closing
+    stop ends there, and the plan flies the leg into the goal from rest to rest.
 
     Args:
         world: the map, blocks not inflated.
@@ -117,9 +127,10 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
 
     Returns:
         A :class:`KinoResult` named ``"quadrotor"``: states (K, 6) position m and velocity
-        m/s, controls (K - 1, 3) ``(phi rad, theta rad, T N)``, durations (K - 1,) s.
-        ``seconds`` and ``time_to_goal`` count from the start of the search, after the
-        start and goal checks and loading the collision kernels.
+        m/s, the last exactly ``(goal, 0)``, controls (K - 1, 3) ``(phi rad, theta rad,
+        T N)``, durations (K - 1,) s (``settings.duration`` each but for the legs and the
+        closing stop). ``seconds`` and ``time_to_goal`` count from the start of the
+        search, after the start and goal checks and loading the collision kernels.
 
     Raises:
         QuadnavError: a start or goal outside the boundary or in a block, the start equal
@@ -139,9 +150,22 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
     for state, control, duration in leg:
         tree.add(tree.size - 1, state, control, duration)
     extend = _Extender(model, free, world.lower[2] + margin, settings)
+    goal_leg = leg_motions(model, problem.goal_leg)
+
+    def close(index: int) -> int:
+        """Add the closing stop from vertex ``index`` and the goal leg; the last vertex
+        added, or -1 when no closing stop from it is free."""
+        stop = extend.close(tree.states[index], goal_point)
+        if stop is None:
+            return -1
+        for state, control, duration in (*stop, *goal_leg):
+            index = tree.add(index, state, control, duration)
+        return index
+
     closest = float(np.linalg.norm(problem.search_start - goal_point))
-    reached = tree.size - 1 if closest <= settings.goal_radius else -1
-    iterations, time_to_goal = 0, 0.0 if reached == 0 else None
+    reached = close(tree.size - 1) if closest <= settings.goal_radius else -1
+    iterations = 0
+    time_to_goal = time.perf_counter() - clock if reached >= 0 else None
     while reached < 0 and iterations < settings.max_iterations:
         elapsed = time.perf_counter() - clock
         if elapsed >= settings.time_limit:
@@ -162,15 +186,19 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         distance = float(np.linalg.norm(end[:3] - goal_point))
         closest = min(closest, distance)
         if distance <= settings.goal_radius:
-            reached, time_to_goal = index, time.perf_counter() - clock
+            reached = close(index)
+            time_to_goal = time.perf_counter() - clock if reached >= 0 else None
     seconds = time.perf_counter() - clock
     if progress is not None:
         progress(1.0 if reached >= 0 else settings.budget_used(iterations, seconds), closest)
     branch = tree.branch(reached) if reached >= 0 else []
     n = tree.size
-    outcome = (f"reached the goal region in {iterations} iterations" if reached >= 0 else
+    outcome = (f"reached the goal region and closed onto the goal in {iterations} iterations"
+               if reached >= 0 else
                f"goal region not reached in {iterations} iterations and {seconds:.2f} s; "
                f"closest {closest:.3g} m from the goal")
+    unclosed = (f"; {extend.unclosed} states in the goal region with no free closing stop"
+                if extend.unclosed else "")
     return KinoResult(
         planner="quadrotor", solved=reached >= 0,
         states=tree.states[branch].reshape(-1, 6), controls=tree.controls[branch[1:]],
@@ -179,14 +207,19 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         tree_durations=tree.durations[:n], iterations=iterations, seconds=seconds,
         time_to_goal=time_to_goal, seed=settings.seed,
         message=f"{outcome}; {n} states; motions pruned: "
-                + ", ".join(f"{count} {why}" for why, count in extend.pruned.items()),
-        leg_controls=len(leg) if reached >= 0 else 0)
+                + ", ".join(f"{count} {why}" for why, count in extend.pruned.items())
+                + unclosed,
+        leg_controls=len(leg) if reached >= 0 else 0,
+        closing_controls=2 if reached >= 0 else 0,
+        goal_leg_controls=len(goal_leg) if reached >= 0 else 0)
 
 
 class _Extender:
-    """One extension: sample controls, propagate them from a state, prune, keep the best.
+    """One extension: sample controls, propagate them from a state, prune, keep the best;
+    and the closing stop from a state in the goal region (:meth:`close`).
 
-    ``pruned`` counts the motions pruned for each reason.
+    ``pruned`` counts the motions pruned for each reason, ``unclosed`` the states with no
+    free closing stop.
     """
 
     def __init__(self, model: SampledQuadrotor, free: World, floor: float,
@@ -196,6 +229,7 @@ class _Extender:
         pieces = model.chord_pieces(settings.duration, CHORD_TOLERANCE)
         self.chord_times = np.linspace(0.0, settings.duration, pieces + 1)
         self.pruned = {"below the floor": 0, "too fast": 0, "colliding": 0}
+        self.unclosed = 0
 
     def __call__(self, state: FloatArray, sample: FloatArray, rng: np.random.Generator
                  ) -> tuple[FloatArray, FloatArray] | None:
@@ -222,6 +256,32 @@ class _Extender:
             return None
         best = candidates[np.argmin(np.linalg.norm(ends[candidates, :3] - sample, axis=1))]
         return ends[best], controls[best]
+
+    def close(self, state: FloatArray, goal: FloatArray
+              ) -> list[tuple[FloatArray, FloatArray, float]] | None:
+        """The closing stop from ``state`` (6,) to rest at ``goal`` (3,), as its two
+        motions (end state (6,), control (3,), duration s), the last ending exactly at
+        ``(goal, 0)``: the shortest candidate (:func:`closing_candidates`) whose pieces
+        stay above the floor and are free (all chords of all candidates in one batch);
+        ``None`` when there is none."""
+        halves, _, _, controls = closing_candidates(self.model, state, goal)
+        accelerations = self.model.acceleration(controls)  # (n, 2, 3)
+        middles = exact_states(state, accelerations[:, 0], halves)
+        starts = np.concatenate([np.broadcast_to(state, middles.shape), middles])
+        pieces = np.concatenate([accelerations[:, 0], accelerations[:, 1]])
+        durations = np.concatenate([halves, halves])
+        fine = _lowest_heights(starts, pieces, durations) > self.floor
+        if halves.size:
+            steps = self.model.chord_pieces(float(halves.max()), CHORD_TOLERANCE)
+            chord_times = durations[:, None] * np.linspace(0.0, 1.0, steps + 1)
+            fine &= _motions_free(self.free, starts, pieces, chord_times)
+        usable = np.flatnonzero(fine.reshape(2, -1).all(axis=0))
+        if usable.size == 0:
+            self.unclosed += 1
+            return None
+        best, half = usable[0], float(halves[usable[0]])
+        return [(middles[best], controls[best, 0], half),
+                (np.concatenate([goal, np.zeros(3)]), controls[best, 1], half)]
 
 
 def leg_motions(model: SampledQuadrotor, leg: FloatArray
@@ -250,20 +310,22 @@ def leg_motions(model: SampledQuadrotor, leg: FloatArray
 
 def _motions_free(free: World, state: FloatArray, accelerations: FloatArray,
                   chord_times: FloatArray) -> NDArray[np.bool_]:
-    """Whether each motion from ``state`` (6,) under accelerations (n, 3) is free: all
-    its chords between the positions at ``chord_times`` (P + 1,) s, in one batch -> (n,)."""
+    """Whether each motion from ``state`` (6,) or states (n, 6) under accelerations (n, 3)
+    is free: all its chords between the positions at ``chord_times`` (P + 1,) or
+    (n, P + 1) s, in one batch -> (n,)."""
     points = exact_positions(state, accelerations, chord_times)  # (n, P + 1, 3)
-    pieces = len(chord_times) - 1
+    pieces = points.shape[1] - 1
     chords = np.empty((len(points), pieces, 2, 3))
     chords[:, :, 0], chords[:, :, 1] = points[:, :-1], points[:, 1:]
     return free.segments_free(chords.reshape(-1, 2, 3)).reshape(-1, pieces).all(axis=1)
 
 
-def _lowest_heights(state: FloatArray, accelerations: FloatArray, duration: float
-                    ) -> FloatArray:
-    """Lowest z (n,), m, along each exact motion from ``state`` (6,) under accelerations
-    (n, 3) held for ``duration`` s: an end, or the vertex of the parabola within it."""
-    z, vz, az = state[2], state[5], accelerations[:, 2]
+def _lowest_heights(state: FloatArray, accelerations: FloatArray,
+                    duration: float | FloatArray) -> FloatArray:
+    """Lowest z (n,), m, along each exact motion from ``state`` (6,) or states (n, 6) under
+    accelerations (n, 3) held for ``duration`` s (a scalar or (n,)): an end, or the
+    vertex of the parabola within it."""
+    z, vz, az = state[..., 2], state[..., 5], accelerations[:, 2]
     end = z + vz * duration + 0.5 * az * duration**2
     lowest = np.minimum(z, end)
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -1,7 +1,8 @@
 """What a kinodynamic planner returns: :class:`KinoResult`.
 
 Unlike a geometric path, a kinodynamic plan is a sequence of *controls*, each held for a
-duration, whose integrated motion joins the start to the goal region. The tree is kept as
+duration, whose integrated motion joins the start to the goal region and, where the planner
+closes it, on to the goal itself. The tree is kept as
 states with the control and duration that led to each one, so its edges can be drawn as
 the curves the robot would follow.
 """
@@ -24,9 +25,11 @@ class KinoResult:
 
     Attributes:
         planner: e.g. ``"diffdrive"``, ``"quadrotor"`` or ``"ompl:control-RRT"``.
-        solved: whether a state inside the goal region was reached.
-        states: (K, d) states along the plan from the start to the state reached in the
-            goal region; (0, d) when not solved. Units as the model states them (SI).
+        solved: whether a state inside the goal region was reached (and, for a planner
+            that closes its plans, the plan closed onto the goal).
+        states: (K, d) states along the plan from the start to its last state: the one
+            reached in the goal region, or the goal itself when the plan is closed;
+            (0, d) when not solved. Units as the model states them (SI).
         controls: (K - 1, c) control held on each edge of the plan.
         durations: (K - 1,) seconds each control is held.
         tree_states: (M, d) every state of the tree, the start first.
@@ -39,7 +42,15 @@ class KinoResult:
         seed: the seed the search ran with.
         message: one line for the user, e.g. why there is no plan.
         leg_controls: how many of the first controls fly the leg out of the safety margin
-            at the start (0 without a leg); the rest of the plan keeps the whole margin.
+            at the start (0 without a leg); the rest of the plan keeps the whole margin
+            but for the goal leg.
+        closing_controls: how many controls, after the state reached in the goal region
+            and before the goal leg, take the plan onto the goal, or to where the goal leg
+            begins (the quadrotor's closing stop, which ends there at rest; the
+            differential drive's turn and straight drive to the leg); 0 when the plan ends
+            where it reached the goal region.
+        goal_leg_controls: how many of the last controls fly the leg into the safety
+            margin to a goal inside it (0 without a leg).
     """
 
     planner: str
@@ -57,6 +68,8 @@ class KinoResult:
     seed: int
     message: str = ""
     leg_controls: int = 0
+    closing_controls: int = 0
+    goal_leg_controls: int = 0
 
     def __post_init__(self) -> None:
         for name in ("states", "controls", "durations", "tree_states", "tree_parents",
