@@ -1,7 +1,8 @@
 """The HTML viewer: ``quadnav view``, ``quadnav fly --html``, and the page in a real browser.
 
-The browser tests drive Debian's chromium through chromedriver (selenium); they skip when
-either is missing (``apt-get install chromium chromium-driver``, ``pip install selenium``).
+The browser tests drive Debian's chromium through chromedriver (selenium, the ``browser``
+fixture of conftest.py); they skip when either is missing (``apt-get install chromium
+chromium-driver``, ``pip install selenium``).
 """
 
 from __future__ import annotations
@@ -128,28 +129,6 @@ def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
 
 
 # ---------------------------------------------------------------- in a real browser
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """Headless chromium driven by selenium, logging the console; skips without them."""
-    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
-    if not (chromium and driver_path):
-        pytest.skip("needs chromium and chromedriver on PATH "
-                    "(Debian: apt-get install chromium chromium-driver)")
-    webdriver = pytest.importorskip("selenium.webdriver",
-                                    reason="needs selenium (pip install selenium)")
-    options = webdriver.ChromeOptions()
-    options.binary_location = chromium
-    # WebGL without a GPU: chromium's software renderer, which it runs only when asked.
-    for argument in ("--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader",
-                     "--disable-dev-shm-usage", "--window-size=1280,860"):
-        options.add_argument(argument)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path),
-                              options=options)
-    yield driver
-    driver.quit()
 
 
 def _open(driver, page) -> None:
