@@ -1,8 +1,10 @@
-"""Shared test set-up: deterministic hypothesis, and the public map corpus in ../shared/maps."""
+"""Shared test set-up: deterministic hypothesis, the public map corpus in ../shared/maps, and
+a headless browser for the pages."""
 
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -129,3 +131,25 @@ def _close_figures():
     pyplot = sys.modules.get("matplotlib.pyplot")
     if pyplot is not None:
         pyplot.close("all")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless chromium driven by selenium, logging the console; skips without them."""
+    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
+    if not (chromium and driver_path):
+        pytest.skip("needs chromium and chromedriver on PATH "
+                    "(Debian: apt-get install chromium chromium-driver)")
+    webdriver = pytest.importorskip("selenium.webdriver",
+                                    reason="needs selenium (pip install selenium)")
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    # WebGL without a GPU: chromium's software renderer, which it runs only when asked.
+    for argument in ("--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader",
+                     "--disable-dev-shm-usage", "--window-size=1280,860"):
+        options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path),
+                              options=options)
+    yield driver
+    driver.quit()

@@ -86,3 +86,24 @@ def assert_outlined(line: Line2D) -> None:
              for stroke in strokes}
     assert set(edges) == {(0.0, 0.0, 0.0), (1.0, 1.0, 1.0)}, edges
     assert edges[(0.0, 0.0, 0.0)] > edges[(1.0, 1.0, 1.0)] > line.get_linewidth()
+
+
+def assert_texts_off_other_axes(fig: Figure) -> None:
+    """No tick label or title of an axes of ``fig`` reaches into another visible axes (a
+    neighbouring panel, a colour bar), and the texts drawn inside each axes (a heat map's
+    cells) lie inside it, apart from one another."""
+    renderer = draw(fig)
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    for ax in shown:
+        texts = [text for labels in axis_texts(ax).values() for text in labels
+                 if text.get_text()] + ([ax.title] if ax.get_title() else [])
+        for text in texts:
+            box = text.get_window_extent(renderer)
+            for other in shown:
+                assert other is ax or not box.overlaps(other.bbox), (text.get_text(), other)
+        inside = [(text.get_text(), text.get_window_extent(renderer)) for text in ax.texts]
+        for name, box in inside:
+            assert ax.bbox.padded(1).contains(box.x0, box.y0), (name, box, ax.bbox)
+            assert ax.bbox.padded(1).contains(box.x1, box.y1), (name, box, ax.bbox)
+        for (first, a), (second, b) in combinations(inside, 2):
+            assert not a.overlaps(b), (first, second)

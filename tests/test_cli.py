@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+import pty
 import signal
+import struct
 import subprocess
 import sys
+import termios
 import time
 
 import numpy as np
@@ -16,6 +20,7 @@ from clitools import QUADNAV, assert_user_error, run, run_here
 from quadnav import __version__
 from quadnav.cli.commands import COMMANDS
 from quadnav.cli.launch import report_stop
+from quadnav.cli.main import build_parser
 from quadnav.signals import Stopped
 from quadnav.world import read_map
 
@@ -182,6 +187,77 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, args, fragments):
     result = run_here(*args, cwd=tmp_path)
     assert_user_error(result, *fragments)
     assert list(tmp_path.iterdir()) == []  # nothing half-written
+
+
+@pytest.mark.parametrize(("command", "args", "flag"), [
+    ("fly", ["forest", "--spede"], "--spede"),
+    ("map info", ["--zzz", "forest"], "--zzz"),
+    ("tello fly", ["forest", "--bogus"], "--bogus"),
+    ("batch", ["forest", "--sedes", "3"], "--sedes 3"),
+    ("worlds", ["--bogus"], "--bogus"),
+])
+def test_a_misspelt_flag_points_to_its_commands_own_help(command, args, flag, tmp_path):
+    """The command (and subcommand) that did not know the flag names its own --help, where
+    the right spelling is listed, not the top level's."""
+    result = run_here(*command.split(), *args, cwd=tmp_path)
+    assert_user_error(result)
+    assert result.stderr == (f"quadnav {command}: error: unrecognized arguments: {flag} "
+                             f"(see quadnav {command} --help)\n")
+
+
+@pytest.mark.parametrize(("args", "values"), [
+    (["batch", "a.txt", "--start-goal", "sg.txt", "b.txt", "--seeds", "2", "c.txt"],
+     {"inputs": ["a.txt", "b.txt", "c.txt"], "start_goal": "sg.txt", "seeds": 2}),
+    (["batch", "--seeds", "2", "a.txt", "b.txt"], {"inputs": ["a.txt", "b.txt"], "seeds": 2}),
+    (["report", "runs/a", "-o", "both.html", "runs/b"],
+     {"folders": ["runs/a", "runs/b"], "output": "both.html"}),
+    (["refly", "batch", "-o", "again", "3"], {"batch": "batch", "mission": "3", "output": "again"}),
+    (["map", "check", "--margin", "0.3", "forest"], {"map": "forest", "margin": 0.3}),
+])
+def test_positional_arguments_may_come_anywhere_among_the_flags(args, values):
+    parsed = vars(build_parser(args).parse_args(args))
+    assert {name: parsed[name] for name in values} == values
+
+
+#: A command whose simulation reports its progress a few times: a 6 s step reference.
+SHORT_FLIGHT = ("track", "step:axis=z,size=0.5", "--no-figures")
+
+
+def _stderr_on_a_terminal(args: list[str], cwd) -> str:
+    """What ``quadnav args`` writes to stderr when stderr is a pseudo-terminal of 80 x 24
+    characters (stdout a pipe), read from the terminal's other end until the process
+    ends."""
+    controller, terminal = pty.openpty()
+    fcntl.ioctl(terminal, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 80, 0, 0))
+    process = subprocess.Popen([*QUADNAV, *args], cwd=cwd, stdout=subprocess.PIPE,
+                               stderr=terminal)
+    os.close(terminal)
+    written = bytearray()
+    while True:
+        try:
+            chunk = os.read(controller, 4096)
+        except OSError:  # EIO: the process ended and closed the terminal
+            break
+        if not chunk:
+            break
+        written += chunk
+    os.close(controller)
+    process.communicate(timeout=120)
+    assert process.returncode == 0, written
+    return written.decode()
+
+
+def test_progress_bars_are_drawn_on_a_terminal_and_not_into_a_pipe(tmp_path):
+    """A bar's carriage returns and cursor moves belong on a terminal; piped or redirected,
+    stderr stays empty of them (here: empty, as the flight warns of nothing)."""
+    piped = run(*SHORT_FLIGHT, "-o", "piped", cwd=tmp_path)
+    assert piped.returncode == 0, piped.stderr
+    assert piped.stderr == ""
+    assert "success" in piped.stdout and "\r" not in piped.stdout
+    shown = _stderr_on_a_terminal([*SHORT_FLIGHT, "-o", "shown"], tmp_path)
+    assert "\r" in shown and "fly: " in shown
+    quiet = _stderr_on_a_terminal([*SHORT_FLIGHT, "-o", "quiet", "--quiet"], tmp_path)
+    assert quiet == ""
 
 
 def test_malformed_map_file_names_file_and_line(tmp_path):

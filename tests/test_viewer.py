@@ -1,7 +1,8 @@
 """The HTML viewer: ``quadnav view``, ``quadnav fly --html``, and the page in a real browser.
 
-The browser tests drive Debian's chromium through chromedriver (selenium); they skip when
-either is missing (``apt-get install chromium chromium-driver``, ``pip install selenium``).
+The browser tests drive Debian's chromium through chromedriver (selenium, the ``browser``
+fixture of conftest.py); they skip when either is missing (``apt-get install chromium
+chromium-driver``, ``pip install selenium``).
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ SMALL = "forest:size=12x12x4,seed=2"
 MAX_PAGE_BYTES = 3_000_000
 #: Fewest distinct colours in a screenshot of a drawn scene (a blank canvas has one).
 MIN_COLOURS = 500
+#: The flown track's colour in the page (viewer.js: FLOWN).
+FLOWN_RGB = (17, 17, 17)
 READOUT = re.compile(r"t = ([\d.]+) s\s+position \(([-\d.]+), ([-\d.]+), ([-\d.]+)\) m"
                      r"\s+speed ([\d.]+) m/s")
 
@@ -126,28 +129,6 @@ def test_view_bad_input_is_one_line(tmp_path, flown, capsys):
 
 
 # ---------------------------------------------------------------- in a real browser
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """Headless chromium driven by selenium, logging the console; skips without them."""
-    chromium, driver_path = shutil.which("chromium"), shutil.which("chromedriver")
-    if not (chromium and driver_path):
-        pytest.skip("needs chromium and chromedriver on PATH "
-                    "(Debian: apt-get install chromium chromium-driver)")
-    webdriver = pytest.importorskip("selenium.webdriver",
-                                    reason="needs selenium (pip install selenium)")
-    options = webdriver.ChromeOptions()
-    options.binary_location = chromium
-    # WebGL without a GPU: chromium's software renderer, which it runs only when asked.
-    for argument in ("--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader",
-                     "--disable-dev-shm-usage", "--window-size=1280,860"):
-        options.add_argument(argument)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=webdriver.ChromeService(executable_path=driver_path),
-                              options=options)
-    yield driver
-    driver.quit()
 
 
 def _open(driver, page) -> None:
@@ -246,6 +227,7 @@ def test_a_run_without_a_path_draws_map_tree_and_metrics(browser, unsolved):
     assert _colours(_canvas_png(browser)) > MIN_COLOURS / 5
     labels = browser.find_element("id", "layers").text
     assert "blocks" in labels and re.search(r"tree \(\d+ edges\)", labels)
+    assert _layer_box(browser, "tree").is_selected()  # nothing to bury: shown at first
     assert "trajectory" not in labels and "drone" not in labels
     assert not browser.find_element("id", "timebar").is_displayed()
     assert browser.find_elements("css selector", "#metrics tr")
@@ -345,3 +327,43 @@ def _purple_near(driver, point, reach: int = 3) -> bool:
     pixels = [image.getpixel((round(x) + dx, round(y) + dy))
               for dx in range(-reach, reach + 1) for dy in range(-reach, reach + 1)]
     return any(red > green + 20 and blue > green + 40 for red, green, blue in pixels)
+
+
+def _layer_box(driver, name: str):
+    """The checkbox of the layer whose label starts with ``name``."""
+    return next(label for label in driver.find_elements("css selector", "#layers label")
+                if label.text.startswith(name)).find_element("tag name", "input")
+
+
+def _pixels_at(driver, points) -> np.ndarray:
+    """The colours (n, 3) drawn at the screen positions of ``points`` (n, 3), m."""
+    image = Image.open(io.BytesIO(_canvas_png(driver))).convert("RGB")
+    spots = driver.execute_script("return arguments[0].map(quadnavViewer.screenOf)",
+                                  np.asarray(points).tolist())
+    return np.array([image.getpixel((round(x), round(y))) for x, y in spots], dtype=int)
+
+
+def _toggle(driver, name: str) -> None:
+    """Click the checkbox of the layer ``name`` and wait for the new drawing."""
+    before = _canvas_png(driver)
+    _layer_box(driver, name).click()
+    _redrawn(driver, before)
+
+
+def test_the_page_opens_with_the_lines_on_top_and_the_tree_off(browser, flown):
+    """The path, trajectory and flown track are what a reader looks for: the page opens
+    without the tree (20,000 edges would bury them), and the tree, once turned on, is drawn
+    beneath them: wherever the flown track shows along the flight, it still does."""
+    folder, _ = flown
+    _open(browser, folder / "view.html")
+    shown = {label.text.split(" (")[0]: label.find_element("tag name", "input").is_selected()
+             for label in browser.find_elements("css selector", "#layers label")}
+    assert shown == {"blocks": True, "tree": False, "path": True, "trajectory": True,
+                     "flown track": True}
+    along = read_run(folder).flight.position[::10]
+    track = (_pixels_at(browser, along) == FLOWN_RGB).all(axis=1)
+    assert track.sum() >= 10  # elsewhere a block or the goal hides it, or it is antialiased
+    _toggle(browser, "tree")
+    still = (_pixels_at(browser, along) == FLOWN_RGB).all(axis=1)
+    assert still[track].all(), np.flatnonzero(track & ~still)
+    assert _errors(browser) == []

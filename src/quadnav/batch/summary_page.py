@@ -7,7 +7,10 @@
   of each group's flown missions;
 * the table of the groups (``summary.json``).
 
-Images are embedded PNGs and the style inline (the report's, :mod:`quadnav.report.html_report`).
+The figures name each map by a short label (the end of its path that tells it apart, cut in
+the middle when long); resting the pointer on a label shows the map's full name, which the
+table gives too. Images are embedded PNGs and the style inline (the report's,
+:mod:`quadnav.report.html_report`).
 """
 
 from __future__ import annotations
@@ -15,15 +18,16 @@ from __future__ import annotations
 import html
 import inspect
 import math
-import os
+import re
 import textwrap
 from collections.abc import Sequence
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.text import Text
 
 from quadnav import __version__
 from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
@@ -46,6 +50,20 @@ DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking\nerror (cm)", 100.0),
                  ("trajectory_duration_s", "trajectory\nduration (s)", 1.0))
 #: Characters per line of a group's label beside the box plots.
 LABEL_WIDTH = 42
+#: Most characters of a map's label in the figures (the page shows its full name on hover).
+MAP_LABEL_WIDTH = 32
+#: Inches a row label of the heat map takes per character, and beyond its characters.
+LABEL_INCHES_PER_CHARACTER = 0.075
+LABEL_INCHES = 0.3
+#: Inches of one speed's column of a heat map at least (room for its two lines of text at
+#: SMALL_FONT), and of the gap after a panel.
+CELL_INCHES = 0.9
+PANEL_GAP_INCHES = 0.3
+#: Inches of the colour bar beside the heat maps, with its labels.
+COLORBAR_INCHES = 1.0
+#: Inches of one row of a heat map, and of a line of panels beyond its rows (title, ticks).
+ROW_INCHES = 0.42
+PANEL_INCHES = 0.8
 
 
 #: Matplotlib's way to lay box plots on their side (``vert`` before 3.10).
@@ -54,12 +72,34 @@ HORIZONTAL = ({"orientation": "horizontal"}
 
 
 def short_maps(names: Sequence[str]) -> dict[str, str]:
-    """Short labels of map names: files relative to the folder they share, built-in world
-    specs and course maps as they are."""
-    files = [name for name in names if not _is_named(name)]
-    common = os.path.commonpath([os.path.dirname(name) for name in files]) if files else ""
-    return {name: name if _is_named(name) or not common
-            else os.path.relpath(name, common) for name in names}
+    """Short labels of map names, at most :data:`MAP_LABEL_WIDTH` characters: built-in world
+    specs and course maps as they are, files by the fewest trailing parts of their path that
+    no other name ends with (the file name when that is enough); cut in the middle when
+    longer; numbered when two would read the same."""
+    parts = {name: (name,) if _is_named(name) else PurePath(name).parts or (name,)
+             for name in dict.fromkeys(names)}
+
+    def tail(name: str) -> str:
+        own = parts[name]
+        others = [other for key, other in parts.items() if key != name]
+        count = next((k for k in range(1, len(own)) if all(other[-k:] != own[-k:]
+                                                            for other in others)), len(own))
+        return str(PurePath(*own[-count:]))
+
+    labels = {name: _cut(tail(name), MAP_LABEL_WIDTH) for name in parts}
+    if len(set(labels.values())) < len(labels):
+        labels = {name: _cut(f"{k}. {tail(name)}", MAP_LABEL_WIDTH)
+                  for k, name in enumerate(parts, 1)}
+    return labels
+
+
+def _cut(text: str, width: int) -> str:
+    """``text``, or when longer than ``width`` characters its start and (longer) end with
+    an ellipsis between, ``width`` characters in all."""
+    if len(text) <= width:
+        return text
+    head = (width - 1) // 3
+    return text[:head] + "\u2026" + text[len(text) - (width - 1 - head):]
 
 
 def _is_named(name: str) -> bool:
@@ -76,7 +116,8 @@ def _percent(value: float | None) -> str:
 
 
 class _Groups:
-    """The groups of a summary with the labels the page shows for them."""
+    """The groups of a summary with the labels the page shows for them: short ones in the
+    figures, the maps' full names in the table and on hover."""
 
     def __init__(self, summary_groups: list[dict[str, Any]]) -> None:
         self.groups = summary_groups
@@ -84,9 +125,10 @@ class _Groups:
         self.varying = [name for name in (*GROUP_COLUMNS, "start", "goal")
                         if len({json_key(g[name]) for g in summary_groups}) > 1]
 
-    def row_label(self, group: dict[str, Any]) -> str:
-        """Map (and its query when the map is flown with several)."""
-        label = self.maps[group["map"]]
+    def row_label(self, group: dict[str, Any], full: bool = False) -> str:
+        """Map (and its query when the map is flown with several), by its short label or
+        by its ``full`` name."""
+        label = group["map"] if full else self.maps[group["map"]]
         same_map = [g for g in self.groups if g["map"] == group["map"]]
         queries = {json_key([g[n] for n in ("start", "goal", "margin_m")]) for g in same_map}
         if len(queries) > 1:
@@ -109,9 +151,10 @@ class _Groups:
             parts.append(f"gains {Path(group['gains']).name}")
         return ", ".join(parts)
 
-    def label(self, group: dict[str, Any]) -> str:
-        """Everything that tells the group apart from the others."""
-        parts = [self.row_label(group)]
+    def label(self, group: dict[str, Any], full: bool = False) -> str:
+        """Everything that tells the group apart from the others, the map by its short
+        label or by its ``full`` name."""
+        parts = [self.row_label(group, full)]
         if "speed" in self.varying:
             parts.append(_speed(group["speed"]))
         panel = self.panel_label(group)
@@ -130,36 +173,45 @@ def _query(group: dict[str, Any]) -> str:
     return f"({start} to {goal}; margin {group['margin_m']:g} m)"
 
 
-def heat_map(labels: _Groups) -> Figure:
+def heat_map(labels: _Groups) -> tuple[Figure, dict[Text, str]]:
     """Success rate per map (rows) and speed (columns), one panel per combination of the
-    other grid values; each cell shows the rate and its 95 % interval in percent."""
+    other grid values; each cell shows the rate and its 95 % interval in percent. The rows
+    are labelled on the left of each line of panels only, so no label reaches into another
+    panel, and the figure grows with the rows. Returns the figure and the row labels drawn,
+    each with its full wording."""
     panels: dict[str, list[dict[str, Any]]] = {}
     for group in labels.groups:
         panels.setdefault(labels.panel_label(group), []).append(group)
-    rows = list(dict.fromkeys(labels.row_label(g) for g in labels.groups))
+    full = {labels.row_label(g): labels.row_label(g, full=True) for g in labels.groups}
+    rows = list(full)
     speeds = sorted({g["speed"] for g in labels.groups},
                     key=lambda v: math.inf if v is None else v)
-    columns = min(len(panels), max(1, int(WIDTH // (1.6 + 1.2 * len(speeds)))))
+    label_width = LABEL_INCHES_PER_CHARACTER * max(len(r) for r in rows) + LABEL_INCHES
+    panel_width = CELL_INCHES * len(speeds) + PANEL_GAP_INCHES
+    width = max(WIDTH, label_width + panel_width + COLORBAR_INCHES)  # wider for many speeds
+    columns = max(1, min(len(panels), int((width - label_width - COLORBAR_INCHES)
+                                          // panel_width)))
     lines = math.ceil(len(panels) / columns)
-    label_width = 0.075 * max(len(r) for r in rows) + 0.3
-    cell_width = (WIDTH - columns * label_width) / (columns * len(speeds))
-    fig = Figure(figsize=(WIDTH, lines * (0.8 + 0.42 * len(rows)) + 0.6), dpi=DPI,
-                 layout="constrained")
+    fig = Figure(figsize=(width, lines * (PANEL_INCHES + ROW_INCHES * len(rows)) + 0.6),
+                 dpi=DPI, layout="constrained")
     axes = np.atleast_1d(fig.subplots(lines, columns, squeeze=False)).ravel()
     image = None
-    for ax, (title, groups) in zip(axes, panels.items(), strict=False):
+    drawn: dict[Text, str] = {}
+    for k, (ax, (title, groups)) in enumerate(zip(axes, panels.items(), strict=False)):
         rates = np.full((len(rows), len(speeds)), np.nan)
         for group in groups:
             i, j = rows.index(labels.row_label(group)), speeds.index(group["speed"])
             rates[i, j] = group["success_rate"]
             text = (f"{_percent(group['success_rate'])} %\n[{_percent(group['ci_low'])}, "
                     f"{_percent(group['ci_high'])}]")
-            ax.text(j, i, text, ha="center", va="center", fontsize=SMALL_FONT if
-                    cell_width > 0.9 else SMALL_FONT - 2,
+            ax.text(j, i, text, ha="center", va="center", fontsize=SMALL_FONT,
                     color="black" if 0.25 < group["success_rate"] < 0.95 else "white")
         image = ax.imshow(rates, cmap="RdYlGn", vmin=0.0, vmax=1.0, aspect="auto")
         ax.set_xticks(range(len(speeds)), [_speed(v) for v in speeds], fontsize=SMALL_FONT)
-        ax.set_yticks(range(len(rows)), rows, fontsize=SMALL_FONT)
+        first = k % columns == 0
+        ax.set_yticks(range(len(rows)), rows if first else [], fontsize=SMALL_FONT)
+        if first:
+            drawn |= {text: full[text.get_text()] for text in ax.get_yticklabels()}
         ax.tick_params(length=0)
         if title:
             ax.set_title(title, fontsize=TITLE_FONT)
@@ -168,12 +220,14 @@ def heat_map(labels: _Groups) -> Figure:
     bar = fig.colorbar(image, ax=axes[:len(panels)].tolist(), shrink=0.8, pad=0.02)
     bar.set_label("success rate", fontsize=SMALL_FONT)
     bar.ax.tick_params(labelsize=SMALL_FONT)
-    return fig
+    return fig, drawn
 
 
-def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]) -> Figure:
+def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]
+                  ) -> tuple[Figure, dict[Text, str]]:
     """Box plots, one per group, of the RMS tracking error, the least clearance and the
-    trajectory duration of its flown missions."""
+    trajectory duration of its flown missions. Returns the figure and the group labels
+    drawn, each with its full wording."""
     members: dict[str, list[dict[str, Any]]] = {}
     for row in rows:
         members.setdefault(json_key(group_values(row)), []).append(row)
@@ -196,7 +250,30 @@ def distributions(labels: _Groups, rows: Sequence[dict[str, Any]]) -> Figure:
         ax.grid(axis="x", alpha=0.3)
     axes[0].set_yticks(positions, names)
     axes[0].set_ylim(-0.7, len(names) - 0.3)
-    return fig
+    full = [labels.label(g, full=True) for g in labels.groups]
+    return fig, dict(zip(axes[0].get_yticklabels(), full, strict=True))
+
+
+def tooltip_boxes(fig: Figure, texts: dict[Text, str]
+                  ) -> list[tuple[tuple[float, float, float, float], str]]:
+    """Where each of ``texts`` is drawn in ``fig`` as (left, top, width, height) in fractions
+    of the figure from its top left corner, with its full wording: the figure is laid out
+    as it will be saved."""
+    fig.draw_without_rendering()
+    width, height = fig.bbox.width, fig.bbox.height
+    boxes = []
+    for text, wording in texts.items():
+        box = text.get_window_extent()
+        boxes.append(((box.x0 / width, 1.0 - box.y1 / height, box.width / width,
+                       box.height / height), wording))
+    return boxes
+
+
+def _figure_with_tooltips(drawn: tuple[Figure, dict[Text, str]], caption: str) -> str:
+    """The page's ``<figure>`` of a figure and its labels' full wording (on hover)."""
+    fig, texts = drawn
+    tooltips = tooltip_boxes(fig, texts)
+    return figure_html(png_bytes(fig), caption, tooltips)
 
 
 def _cell(value: Any) -> str:
@@ -207,12 +284,18 @@ def _cell(value: Any) -> str:
     return html.escape(str(value))
 
 
+def _breakable(text: str) -> str:
+    """``text`` as HTML that may wrap after each ``/`` and ``_``, so a long path or column
+    name fits a narrow column."""
+    return re.sub(r"([/_])", r"\1<wbr>", html.escape(text))
+
+
 def groups_table(labels: _Groups) -> str:
     """The groups as an HTML table: what tells them apart, n, successes, the rate and its
     interval (percent), refused missions and the medians."""
     header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
-              *(f"median {name}" for name in MEDIAN_COLUMNS))
-    rows = [(html.escape(labels.label(g)), str(g["n"]), str(g["successes"]),
+              *(_breakable(f"median {name}") for name in MEDIAN_COLUMNS))
+    rows = [(_breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
              _percent(g["success_rate"]),
              f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
              *(_cell(g[f"median_{name}"]) for name in MEDIAN_COLUMNS))
@@ -239,15 +322,17 @@ def summary_html(summary: dict[str, Any], rows: Sequence[dict[str, Any]], folder
             overall]
     if labels.groups:
         body += ["<h2>Success rate</h2>",
-                 figure_html(png_bytes(heat_map(labels)),
-                             "Share of missions that reached the goal, per map and speed, in "
-                             "percent, with its 95 % interval in brackets."),
+                 _figure_with_tooltips(heat_map(labels),
+                                       "Share of missions that reached the goal, per map and "
+                                       "speed, in percent, with its 95 % interval in "
+                                       "brackets. A map's full name shows on its label."),
                  "<h2>Distributions</h2>",
-                 figure_html(png_bytes(distributions(labels, rows)),
-                             "Per group, over its flown missions: the RMS tracking error, the "
-                             "least clearance of the vehicle's centre from a block, and the "
-                             "trajectory's duration (box: quartiles; whiskers: 1.5 times the "
-                             "box; dots: beyond)."),
+                 _figure_with_tooltips(distributions(labels, rows),
+                                       "Per group, over its flown missions: the RMS tracking "
+                                       "error, the least clearance of the vehicle's centre "
+                                       "from a block, and the trajectory's duration (box: "
+                                       "quartiles; whiskers: 1.5 times the box; dots: "
+                                       "beyond)."),
                  "<h2>Groups</h2>", groups_table(labels)]
     return html_page("quadnav batch summary", "".join(body))
 

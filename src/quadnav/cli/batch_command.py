@@ -24,6 +24,7 @@ from quadnav.cli.args import (
 )
 from quadnav.cli.commands import command_help
 from quadnav.cli.launch import interrupted_exit_code
+from quadnav.cli.progress import terminal_bar
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
@@ -82,8 +83,8 @@ class _Progress:
         print(f"{len(run.missions)} missions, {len(run.rows)} already in {run.folder}; flying "
               f"{len(run.todo)} on {workers} {self.where.format(s='s' if workers > 1 else '')}",
               flush=True)
-        self.bar = tqdm(total=len(run.todo), desc="batch", unit="mission", disable=self.quiet,
-                        file=sys.stderr, dynamic_ncols=True)
+        self.bar = terminal_bar(self.quiet, total=len(run.todo), desc="batch", unit="mission",
+                                dynamic_ncols=True)
 
     def row(self, row: dict) -> None:
         finished = rate(list(self.run.rows.values()))

@@ -59,6 +59,7 @@ from quadnav.cli.flight_args import (
     add_vehicle_arguments,
     vehicle_and_gains,
 )
+from quadnav.cli.progress import fraction_bar, terminal_bar
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -123,8 +124,8 @@ def search(label: str, quiet: bool, planner: Callable[[Progress], KinoResult]) -
     def progress(fraction: float, closest: float) -> None:
         nonlocal bar
         if bar is None:
-            bar = tqdm(total=100, desc=label, unit="%", leave=False, disable=quiet,
-                       file=sys.stderr, bar_format="{desc}: {bar} {n:.0f}%{postfix}")
+            bar = terminal_bar(quiet, total=100, desc=label, unit="%", leave=False,
+                               bar_format="{desc}: {bar} {n:.0f}%{postfix}")
         bar.set_postfix_str(f"closest {closest:.2f} m", refresh=False)
         bar.update(100 * fraction - bar.n)
 
@@ -357,7 +358,6 @@ def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
              gains: Gains) -> KinoFlight:
     """Fly the solved plan closed loop with ``vehicle``, ``gains`` and the controller of
     the flags, under a progress bar."""
-    from quadnav.cli.progress import fraction_bar
     from quadnav.kinoflight import fly_kino_plan
     from quadnav.sim.settings import SimSettings
 

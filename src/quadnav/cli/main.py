@@ -23,7 +23,31 @@ EXIT_USAGE = 2
 
 
 class _OneLineErrorParser(argparse.ArgumentParser):
-    """An ArgumentParser whose usage errors are one line on stderr, exit code 2."""
+    """An ArgumentParser whose usage errors are one line on stderr, exit code 2, naming
+    the help of the (sub)command that found them, e.g. ``quadnav tello fly --help`` for a
+    misspelt flag of ``tello fly``. A command's positional arguments may come anywhere
+    among its flags (``batch MAP1 --seeds 3 MAP2``)."""
+
+    #: Set while :meth:`parse_known_intermixed_args` parses, which calls
+    #: :meth:`parse_known_args` for each of its two passes (Python 3.11, 3.12).
+    _intermixing = False
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        """Parse as argparse does, but mixing a command's positionals with its flags, and
+        report unrecognised arguments here, under this (sub)command's name."""
+        if self._intermixing:
+            return super().parse_known_args(args, namespace)
+        if self._subparsers is None:  # a command: no subcommands, so nothing to pass down
+            self._intermixing = True
+            try:
+                namespace, extras = self.parse_known_intermixed_args(args, namespace)
+            finally:
+                self._intermixing = False
+        else:
+            namespace, extras = super().parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -1,12 +1,21 @@
-"""Progress bars on stderr for the long stages (planning, simulation)."""
+"""Progress bars on stderr for the long stages (planning, simulation, batches), drawn
+only on a terminal."""
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from tqdm import tqdm
+
+
+def terminal_bar(quiet: bool, **options: Any) -> tqdm:
+    """A tqdm bar on stderr (``options``: tqdm's), drawn only when stderr is a terminal and
+    not ``quiet``: piped or redirected to a file, stderr keeps only warnings and errors,
+    with no carriage returns or cursor moves to litter a log."""
+    return tqdm(file=sys.stderr, disable=quiet or not sys.stderr.isatty(), **options)
 
 
 @contextmanager
@@ -18,8 +27,8 @@ def planning_bar(name: str, quiet: bool) -> Iterator[Callable[[float, float], No
 
     def progress(fraction: float, best: float) -> None:
         if not bars:
-            bars.append(tqdm(total=100, desc=name, unit="%", leave=False, disable=quiet,
-                             file=sys.stderr, bar_format="{desc}: {bar} {n:.0f}%{postfix}"))
+            bars.append(terminal_bar(quiet, total=100, desc=name, unit="%", leave=False,
+                                     bar_format="{desc}: {bar} {n:.0f}%{postfix}"))
         bars[0].set_postfix_str(f"best {best:.2f} m" if best < float("inf") else "no path yet",
                                 refresh=False)
         bars[0].update(100 * fraction - bars[0].n)
@@ -39,8 +48,8 @@ def fraction_bar(name: str, quiet: bool) -> Iterator[Callable[[float], None]]:
 
     def progress(fraction: float) -> None:
         if not bars:
-            bars.append(tqdm(total=100, desc=name, unit="%", leave=False, disable=quiet,
-                             file=sys.stderr, bar_format="{desc}: {bar} {n:.0f}%"))
+            bars.append(terminal_bar(quiet, total=100, desc=name, unit="%", leave=False,
+                                     bar_format="{desc}: {bar} {n:.0f}%"))
         bars[0].update(100 * fraction - bars[0].n)
 
     try:

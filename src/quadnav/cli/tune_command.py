@@ -95,12 +95,13 @@ class _TrialBar:
 
     def round(self, study) -> None:
         from optuna.trial import TrialState
-        from tqdm import tqdm
+
+        from quadnav.cli.progress import terminal_bar
 
         done = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
         if self.bar is None:
-            self.bar = tqdm(total=self.total, desc="trials", unit="trial", disable=self.quiet,
-                            file=sys.stderr, leave=False)
+            self.bar = terminal_bar(self.quiet, total=self.total, desc="trials", unit="trial",
+                                    leave=False)
         self.bar.set_postfix_str(f"best {study.best_value:.3f}", refresh=False)
         self.bar.update(done - self.bar.n)
 

@@ -64,6 +64,9 @@ h3 { font-size: 1.05em; margin-top: 1.6em; }
 .failure { color: #c62828; }
 figure { margin: 1em 0; }
 figure img { max-width: 100%; height: auto; border: 1px solid #e4e4e4; }
+.tooltips { position: relative; width: fit-content; max-width: 100%; }
+.tooltips img { display: block; }
+.tooltips .tooltip { position: absolute; }
 figcaption { font-size: 0.9em; color: #555; }
 table { border-collapse: collapse; font-size: 0.9em; margin: 0.5em 0; }
 th, td { border: 1px solid #ddd; padding: 0.25em 0.6em; text-align: left;
@@ -144,13 +147,23 @@ def png_bytes(fig: Figure) -> bytes:
     return buffer.getvalue()
 
 
-def figure_html(png: bytes, caption: str) -> str:
-    """A ``<figure>`` with the PNG embedded (base64) and its caption."""
+def figure_html(png: bytes, caption: str,
+                tooltips: Sequence[tuple[tuple[float, float, float, float], str]] = ()) -> str:
+    """A ``<figure>`` with the PNG embedded (base64) and its caption; each of ``tooltips``,
+    ``((left, top, width, height), text)`` with the box in fractions of the image from its
+    top left corner, shows ``text`` when the pointer rests on that part of the image (a
+    shortened label's full wording), at any size the image is shown."""
     width, height = struct.unpack(">II", png[16:24])  # from the PNG's IHDR chunk
     data = base64.b64encode(png).decode("ascii")
-    return (f'<figure><img src="data:image/png;base64,{data}" width="{width}" '
-            f'height="{height}" alt="{html.escape(caption)}">'
-            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+    image = (f'<img src="data:image/png;base64,{data}" width="{width}" '
+             f'height="{height}" alt="{html.escape(caption)}">')
+    if tooltips:
+        spots = "".join(
+            f'<span class="tooltip" title="{html.escape(text)}" style="left: {100 * left:.3f}%; '
+            f'top: {100 * top:.3f}%; width: {100 * wide:.3f}%; height: {100 * high:.3f}%">'
+            "</span>" for (left, top, wide, high), text in tooltips)
+        image = f'<div class="tooltips">{image}{spots}</div>'
+    return f"<figure>{image}<figcaption>{html.escape(caption)}</figcaption></figure>"
 
 
 def html_page(title: str, body: str) -> str:

@@ -1,15 +1,16 @@
 """A run as one self-contained HTML page to explore in a browser, offline.
 
 The page (``quadnav view DIR``, ``quadnav fly --html``) shows the map (blocks in their
-colours, the boundary as a transparent box), the explored tree, the path in red, the
-trajectory coloured by speed, the flown track (a Tello's: its dead-reckoned estimate,
-and its true track when the run folder has one), start and goal, and the drone's body box
-that a time slider moves along the flight; beside it, the metrics. It draws with three.js
-(WebGL, a depth buffer, so near things hide far ones) and its orbit controls: rotate by
-dragging, pan with shift or the right button, zoom with the wheel. No network is needed:
-three.js (vendored from the npm registry's ``three`` 0.147.0, MIT, in ``viewer/three/``
-with its licence), the viewer (``viewer/viewer.js``) and the run's numbers (JSON) are
-written into the page.
+colours, the boundary as a transparent box), the path in red, the trajectory coloured by
+speed, the flown track (a Tello's: its dead-reckoned estimate, and its true track when the
+run folder has one), start and goal, and the drone's body box that a time slider moves
+along the flight; beside it, the metrics. The explored tree is drawn faint beneath the
+lines, and off until its checkbox turns it on (on at first for a run without a path). It
+draws with three.js (WebGL, a depth buffer, so near things hide far ones) and its orbit
+controls: rotate by dragging, pan with shift or the right button, zoom with the wheel. No
+network is needed: three.js (vendored from the npm registry's ``three`` 0.147.0, MIT, in
+``viewer/three/`` with its licence), the viewer (``viewer/viewer.js``) and the run's
+numbers (JSON) are written into the page.
 """
 
 from __future__ import annotations

@@ -25,15 +25,19 @@
   const START = "#e00000", GOAL = "#008000", PATH = "#e00000", FLOWN = "#111111";
   const TRUTH = "#9467bd"; // a Tello run's true track (matplotlib's tab:purple)
   const TREE = "#598cd9", DRONE = "#ff7f0e", COLLISION = "#e000e0";
-  const layers = {}; // name -> {label, swatch, objects}
-  const addLayer = (name, label, swatch) => { layers[name] = { label, swatch, objects: [] }; };
+  const layers = {}; // name -> {label, swatch, shown at first, objects}
+  const addLayer = (name, label, swatch, shown = true) => {
+    layers[name] = { label, swatch, shown, objects: [] };
+  };
   if (data.blocks.length) addLayer("blocks", `blocks (${data.blocks.length / 6})`,
     `rgb(${data.colors.slice(0, 3).map((x) => Math.round(255 * x))})`);
   if (data.tree.length) {
     const drawn = data.tree.length / 6;
+    // off at first when there is a path (thousands of edges would bury it, the trajectory
+    // and the flight), and dimmed beneath them when shown
     addLayer("tree", `tree (${data.treeEdges.toLocaleString("en")} edges` +
       (drawn < data.treeEdges ? `, ${drawn.toLocaleString("en")} drawn)` : ")"),
-      "rgba(89, 140, 217, 0.6)");
+      "rgba(89, 140, 217, 0.3)", !data.path);
   }
   if (data.path) addLayer("path", `path (${data.path.length / 3} waypoints)`, PATH);
   if (data.trajectory) addLayer("trajectory", "trajectory (colour: speed)",
@@ -98,11 +102,15 @@
   const wideLine = (flat, width, colour, colours) => {
     const geometry = new THREE.LineGeometry();
     geometry.setPositions(flat);
+    // drawn after the tree and the other lines before them, none writing depth, so each
+    // lies on those: the tree under the path, the trajectory and the flown track, in that
+    // order; blocks in front still hide them
     const material = new THREE.LineMaterial({ color: colour ?? 0xffffff, linewidth: width,
-      vertexColors: Boolean(colours) });
+      vertexColors: Boolean(colours), transparent: true, depthWrite: false });
     if (colours) geometry.setColors(colours);
     wideLines.push(material);
     const line = new THREE.Line2(geometry, material);
+    line.renderOrder = wideLines.length;
     line.computeLineDistances();
     return line;
   };
@@ -148,7 +156,7 @@
   }
   if (data.tree.length) {
     layers.tree.objects.push(segments(data.tree, new THREE.LineBasicMaterial({ color: TREE,
-      transparent: true, opacity: 0.45, depthWrite: false })));
+      transparent: true, opacity: data.path ? 0.2 : 0.45, depthWrite: false })));
   }
   if (data.path) layers.path.objects.push(wideLine(data.path, 2.4, PATH));
   if (data.trajectory) {
@@ -158,7 +166,10 @@
   }
   if (data.flight) layers.flown.objects.push(wideLine(data.flight.position, 1.5, FLOWN));
   if (data.truth) layers.truth.objects.push(wideLine(data.truth, 1.5, TRUTH));
-  for (const layer of Object.values(layers)) scene.add(...layer.objects);
+  for (const layer of Object.values(layers)) {
+    for (const object of layer.objects) object.visible = layer.shown;
+    scene.add(...layer.objects);
+  }
 
   // start, goal, and where a collision stopped the flight
   const ball = (p, colour, r) => {
@@ -293,7 +304,7 @@
 
   // ------------------------------------------------------------------ layers panel
   for (const layer of Object.values(layers)) {
-    const box = element("input", { type: "checkbox", checked: true });
+    const box = element("input", { type: "checkbox", checked: layer.shown });
     box.addEventListener("change", () => {
       for (const object of layer.objects) object.visible = box.checked;
       redraw();
