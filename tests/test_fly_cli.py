@@ -173,3 +173,51 @@ def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(tmp_path):
     parameters = json.loads((tmp_path / "windy/parameters.json").read_text())
     assert parameters["simulation"]["wind"] == [0.03, 0.0, 0.0]
     assert parameters["simulation"]["gust_std"] == 0.01
+
+
+# ------------------------------------------------------------------- the margin kept
+#: A flight that keeps clearly less than the 0.2 m margin asked (0.186 m, 14 mm short),
+#: and SMALL, which keeps clearly more (0.230 m).
+SHORT_OF_MARGIN = "window:seed=17"
+
+
+def test_a_flight_short_of_the_margin_says_so_in_a_warning_and_strict_fails_it(tmp_path):
+    result = run_here("fly", SHORT_OF_MARGIN, "-o", tmp_path / "out", "--quiet",
+                      "--no-figures")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    kept, asked = metrics["flight_margin_m"], metrics["margin_m"]
+    assert metrics["success"] and kept < asked - 0.01
+    assert metrics["margin_shortfall_m"] == pytest.approx(asked - kept)
+    # the place named is the flight's record at the time it kept the least
+    when = metrics["flight_margin_time_s"]
+    flight = np.loadtxt(tmp_path / "out/flight.csv", delimiter=",", skiprows=1)
+    place = flight[np.argmin(np.abs(flight[:, 0] - when)), 1:4]
+    assert [line for line in result.stderr.splitlines() if "margin asked" in line] == [
+        f"quadnav: warning: the flight kept only {kept:.3f} m of the 0.2 m margin asked off "
+        f"the legs ({asked - kept:.3g} m short), least at t = {when:.2f} s near "
+        f"({', '.join(f'{v:.2f}' for v in place)})"]
+
+    strict = run_here("fly", SHORT_OF_MARGIN, "-o", tmp_path / "strict", "--quiet",
+                      "--no-figures", "--strict")
+    assert strict.returncode == 1
+    assert strict.stderr.splitlines()[-1] == (
+        "quadnav: flight failed: it kept less margin than asked (--strict)")
+
+
+def test_a_flight_that_keeps_the_margin_gives_no_warning_even_when_strict(tmp_path):
+    result = run_here("fly", SMALL, "-o", tmp_path / "out", "--quiet", "--no-figures",
+                      "--strict")
+    assert result.returncode == 0, result.stderr
+    assert "margin asked" not in result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert metrics["flight_margin_m"] > metrics["margin_m"] + 0.01
+    assert metrics["margin_shortfall_m"] == 0.0
+
+
+def test_any_shortfall_counts_however_small():
+    from quadnav.mission import margin_shortfall
+
+    assert margin_shortfall(0.2, 0.2 - 1e-9) > 0.0
+    assert margin_shortfall(0.2, 0.2) == margin_shortfall(0.2, 0.25) == 0.0
+    assert margin_shortfall(0.12, 0.083) == pytest.approx(0.037)

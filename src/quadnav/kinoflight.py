@@ -193,7 +193,8 @@ class KinoFlight:
     def measured(self) -> dict:
         """The flight's part of :meth:`metrics` (:func:`~quadnav.mission.measure_flight`:
         the margins measured exactly, the tracking statistics), measured once."""
-        return measure_flight(self.world, self.trajectory, self.flight, self.settings)
+        return measure_flight(self.world, self.trajectory, self.flight, self.settings,
+                              self.world.margin or 0.0)
 
     def parameters(self) -> dict:
         """Every setting the plan and the flight ran with, JSON-ready."""

@@ -83,6 +83,13 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
                                           f"(default: {SimSettings.settle_time:g})")
 
 
+def add_strict_argument(parser: argparse.ArgumentParser) -> None:
+    """--strict: a flight that kept less margin than asked fails (exit 1)."""
+    parser.add_argument("--strict", action="store_true",
+                        help="exit 1 when the flight kept less margin than asked off the legs, "
+                             "by any amount (a warning line says so either way)")
+
+
 def simulation_settings(args: argparse.Namespace) -> SimSettings:
     """The settings of :func:`add_simulation_arguments` and ``--seed``."""
     return SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
