@@ -221,3 +221,38 @@ def test_any_shortfall_counts_however_small():
     assert margin_shortfall(0.2, 0.2 - 1e-9) > 0.0
     assert margin_shortfall(0.2, 0.2) == margin_shortfall(0.2, 0.25) == 0.0
     assert margin_shortfall(0.12, 0.083) == pytest.approx(0.037)
+
+
+# ------------------------------------------------------------------------- the floor
+def _p2b(shared_maps) -> list:
+    """The real Tello lab map with its start and goal on the floor (z = 0)."""
+    return [shared_maps / "rbe595/p2b_map1.txt", "--start-goal",
+            shared_maps / "rbe595/p2b_startandgoal_map1.txt"]
+
+
+@pytest.mark.parametrize("controller", [[], ["--controller", "se3", "--control-rate", "100"]])
+def test_a_take_off_and_a_landing_on_the_floor_where_the_plan_has_them_are_no_crash(
+        tmp_path, shared_maps, controller):
+    result = run_here("fly", *_p2b(shared_maps), *controller, "-o", tmp_path / "out",
+                      "--quiet", "--no-figures")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert metrics["success"] and metrics["ending"] == "completed"
+    # it lands on the floor (SE(3) at 100 Hz a little early, where the plan descends the
+    # last centimetres into the goal) at a tenth of a metre per second or so
+    assert 0.0 < metrics["floor_touch_speed_m_s"] < 0.2
+
+
+def test_a_gust_that_slams_the_vehicle_into_the_floor_is_a_crash(tmp_path, shared_maps):
+    # 0.2 N gusts (a quarter of the Tello's weight): this seed pushes it into the floor at
+    # 0.95 m/s as it descends to the goal; before floor contact counted, it flew on and
+    # ended 3.4 cm from the goal, a success
+    result = run_here("fly", *_p2b(shared_maps), "--gusts", "0.2", "--seed", "6",
+                      "-o", tmp_path / "out", "--quiet", "--no-figures")
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert result.returncode == 1
+    assert not metrics["success"] and metrics["ending"] == "hit the floor"
+    assert metrics["floor_touch_speed_m_s"] > 0.85 and not metrics["collision"]
+    assert result.stderr.splitlines()[-1] == (
+        f"quadnav: flight failed: hit the floor at {metrics['floor_touch_speed_m_s']:.2f} m/s "
+        f"at t = {metrics['contact_time_s']:.2f} s")

@@ -242,6 +242,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "ending": flight.ending.value,
         "contact_time_s": flight.contact_time,
         "contact_block": flight.contact_block,
+        "floor_touch_speed_m_s": flight.floor_speed,
         "final_error_m": flight.final_error,
         "goal_tolerance_m": settings.goal_tolerance,
         "flight_time_s": flight.duration,

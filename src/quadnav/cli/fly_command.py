@@ -50,7 +50,7 @@ from quadnav.planning import get_planner, make_problem
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
-from quadnav.sim.flight import Flight
+from quadnav.sim.flight import Ending, Flight
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
@@ -114,11 +114,13 @@ def failure_reason(mission: Mission) -> str:
 
 
 def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
-    """One line saying why a flight failed: a collision, leaving the map, diverging, or
-    ending more than ``goal_tolerance`` m from ``goal``."""
+    """One line saying why a flight failed: a collision, hitting the floor, leaving the map,
+    diverging, or ending more than ``goal_tolerance`` m from ``goal``."""
     if flight.contact_block is not None:
         return (f"collided with block {flight.contact_block} at t = "
                 f"{flight.contact_time:.2f} s")
+    if flight.ending is Ending.FLOOR:
+        return f"hit the floor at {flight.floor_speed:.2f} m/s at t = {flight.contact_time:.2f} s"
     if flight.contact_time is not None:
         return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
     return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "

@@ -33,7 +33,7 @@ from quadnav.world.model import World
 #: Simulated seconds per call of the compiled loop when progress is reported.
 CHUNK_SECONDS = 1.0
 _ENDINGS = {loop.COLLISION: Ending.COLLISION, loop.LEFT_BOUNDARY: Ending.LEFT_BOUNDARY,
-            loop.DIVERGED: Ending.DIVERGED}
+            loop.DIVERGED: Ending.DIVERGED, loop.FLOOR: Ending.FLOOR}
 
 
 def flight_steps(duration: float, settings: SimSettings) -> int:
@@ -101,7 +101,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
             no ``controller`` is given.
         world: the real (uninflated) map: its blocks are obstacles, its boundary the box
             the centre must stay in (within ``settings.boundary_tolerance``) and its lower
-            face the floor. ``None``: open space, no floor.
+            face the floor, met safely only where the reference is on it (within
+            ``settings.goal_tolerance``) and no faster than ``settings.touchdown_speed``.
+            ``None``: open space, no floor.
         settings: rates, stopping and success rules, disturbances.
         progress: called with the fraction of the flight done, after each chunk of
             :data:`CHUNK_SECONDS` (without it the loop runs the flight in one call).
@@ -126,7 +128,8 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
     memory = controller.new_memory()
-    where = loop.scene(world, vehicle.half_size, settings.boundary_tolerance)
+    where = loop.scene(world, vehicle.half_size, settings.boundary_tolerance,
+                       touchdown=(settings.touchdown_speed, settings.goal_tolerance))
     acting = loop.Disturbances(forces, noise, settings.noisy)
     every = settings.record_every
     record = loop.new_record(steps, every)
@@ -159,6 +162,8 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         mixer_saturation=float(record.stats[loop.SATURATED] / count),
         wall_time=time.perf_counter() - began,
         rotor_energy=rotor_energy(t, states, params),
+        floor_speed=(None if record.stats[loop.FLOOR_SPEED] < 0
+                     else float(record.stats[loop.FLOOR_SPEED])),
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
 
