@@ -33,6 +33,7 @@ from scipy.interpolate import PPoly
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.sampling import check_control_rate
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.result import KinoResult
@@ -228,14 +229,17 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         progress: called with the fraction of the flight simulated.
 
     Raises:
-        QuadnavError: the plan's stop would not keep the margin (:func:`plan_trajectory`).
+        QuadnavError: the plan's stop would not keep the margin (:func:`plan_trajectory`),
+            or a control rate too slow for the controller's gains
+            (:func:`~quadnav.control.sampling.check_control_rate`).
     """
     vehicle = vehicle or load_params()
     gains = gains or load_gains(preset=vehicle.gains)
     settings = settings or SimSettings()
     trajectory = plan_trajectory(result, model, world)
-    flight = simulate(trajectory, vehicle, gains, world, settings, progress,
-                      controller=CONTROLLERS.get(controller)(gains))
+    flown_by = CONTROLLERS.get(controller)(gains)
+    check_control_rate(flown_by, vehicle, settings.control_rate)
+    flight = simulate(trajectory, vehicle, gains, world, settings, progress, controller=flown_by)
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,
                       controller, settings)
 

@@ -23,6 +23,7 @@ from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
@@ -80,7 +81,10 @@ class MissionSettings:
         gains: the cascade's gains (the PX4-style controller).
         controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
             ``cascade``, ``se3`` or one registered).
-        sim: rates, stopping and success rules, disturbances, seed.
+        sim: rates, stopping and success rules, disturbances, seed. A control rate too
+            slow for the controller's gains on the flown vehicle is refused, one that
+            leaves them little margin warned about
+            (:func:`~quadnav.control.sampling.check_control_rate`).
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
             its model, unaware of the difference.
@@ -98,7 +102,8 @@ class MissionSettings:
     plant: VehicleParams | None = None
 
     def __post_init__(self) -> None:
-        CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
+        factory = CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
+        check_control_rate(factory(self.gains), self.flown_vehicle, self.sim.control_rate)
 
     @property
     def flown_vehicle(self) -> VehicleParams:

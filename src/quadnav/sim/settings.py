@@ -110,3 +110,9 @@ class SimSettings:
         """Whether any measurement noise is on."""
         return (self.position_noise > 0 or self.velocity_noise > 0
                 or self.attitude_noise > 0 or self.gyro_noise > 0)
+
+
+def default_record_rate(control_rate: float) -> float:
+    """The record rate for a ``control_rate`` Hz: the default, 100 Hz, or the control rate
+    when it is lower (a record is kept at most every control step)."""
+    return min(SimSettings.record_rate, control_rate)
