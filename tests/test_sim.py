@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -10,7 +12,7 @@ import pytest
 from quadnav.sim.collision import boxes_touch
 from quadnav.sim.flight import Ending
 from quadnav.sim.settings import SimSettings
-from quadnav.sim.simulate import simulate
+from quadnav.sim.simulate import CHUNK_SECONDS, simulate
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import hold_trajectory
 from quadnav.vehicle import quaternion
@@ -142,6 +144,40 @@ def test_the_same_seed_flies_the_same_flight_and_another_does_not():
     assert np.array_equal(a.states, b.states)
     assert not np.array_equal(a.states, c.states)
     assert a.ending is Ending.COMPLETED and c.ending is Ending.COMPLETED
+
+
+def test_the_loop_is_timed_apart_from_its_loading():
+    # a controller object this process has not flown, whose loop the flight looks up and
+    # loads; the times are checked for their order only (which interval holds which), not
+    # for a speed
+    from quadnav.control.contract import Controller
+    from quadnav.control.se3 import se3_controller
+
+    se3 = se3_controller()
+    fresh = Controller("fresh", se3.step, se3.gains, se3.memory_size)
+    trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
+    stamps = []
+    began = time.perf_counter()
+    flight = simulate(trajectory, TELLO, world=WORLD, controller=fresh,
+                      progress=lambda _: stamps.append(time.perf_counter()))
+    ended = time.perf_counter()
+    assert len(stamps) >= flight.duration / CHUNK_SECONDS  # a chunk a second
+    # loading, then the loop: two disjoint intervals inside the call, the loading wholly
+    # before the first chunk ended and the loop covering every chunk
+    assert 0.0 < flight.load_time < stamps[0] - began
+    assert stamps[-1] - stamps[0] <= flight.wall_time <= ended - began - flight.load_time
+
+
+def test_the_real_time_factor_divides_the_flight_by_the_loop_alone(tmp_path):
+    from clitools import run_here
+
+    result = run_here("track", "hover", "--no-figures", "--quiet", "-o", tmp_path)
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["real_time_factor"] == metrics["flight_time_s"] / metrics["sim_wall_time_s"]
+    assert metrics["sim_load_time_s"] > 0.0
+    assert (f"  wall time: loading the loop {metrics['sim_load_time_s']:.2f} s, simulation "
+            f"{metrics['sim_wall_time_s']:.2f} s ({metrics['real_time_factor']:.0f}x real time)"
+            in result.stdout.splitlines())
 
 
 def test_slower_control_than_physics_still_tracks():

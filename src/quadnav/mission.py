@@ -121,7 +121,8 @@ class Mission:
         raw_length: path length before refinement, m (inf without a path).
         trajectory: the reference flown (None without a path).
         flight: the simulated flight (None without a path).
-        timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``.
+        timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``
+            (the closed loop alone; its loading is the flight's ``load_time``).
         settings: what the mission ran with.
     """
 
@@ -257,6 +258,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "min_clearance_m": min_clearance(flight, world),
         "mixer_saturation": flight.mixer_saturation,
         "rotor_energy_j": flight.rotor_energy,
+        "sim_load_time_s": flight.load_time,
         "sim_wall_time_s": flight.wall_time,
         "real_time_factor": flight.duration / flight.wall_time if flight.wall_time else None,
     }

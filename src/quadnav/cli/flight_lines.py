@@ -27,6 +27,13 @@ def min_clearance(m: dict) -> str:
                                f"{clearance:.3f} m")
 
 
+def simulation_time(m: dict) -> str:
+    """``loading the loop a s, simulation b s (cx real time)``: the one-off loading apart
+    from the loop, whose time alone the real-time factor divides."""
+    return (f"loading the loop {m['sim_load_time_s']:.2f} s, simulation "
+            f"{m['sim_wall_time_s']:.2f} s ({m['real_time_factor']:.0f}x real time)")
+
+
 def margin_shortfall(m: dict, t: FloatArray, positions: FloatArray) -> str | None:
     """``the flight kept only a m of the b m margin asked off the legs (c m short), least
     at t = d s near (x, y, z)`` when the flight of ``m`` kept less than asked

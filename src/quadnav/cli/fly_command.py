@@ -31,6 +31,7 @@ from quadnav.cli.flight_args import (
 from quadnav.cli.flight_lines import (
     STRICT_FAILURE,
     min_clearance,
+    simulation_time,
     tracking_errors,
     warn_margin_shortfall,
 )
@@ -147,8 +148,7 @@ def print_summary(mission: Mission) -> bool:
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m){legs}")
     short = warn_margin_shortfall(m, mission.flight.t, mission.flight.position)
     print(f"  wall time: planning {m['planning_time_s']:.2f} s, trajectory "
-          f"{m['trajectory_time_s']:.2f} s, simulation {m['sim_wall_time_s']:.2f} s "
-          f"({m['real_time_factor']:.0f}x real time)")
+          f"{m['trajectory_time_s']:.2f} s, {simulation_time(m)}")
     return short
 
 

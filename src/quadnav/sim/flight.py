@@ -41,7 +41,12 @@ class Flight:
         max_velocity_error: largest velocity error at any control step, m/s.
         mixer_saturation: fraction of control steps at which the mixer had to change
             the wrench.
-        wall_time: seconds the simulation took.
+        wall_time: seconds the closed loop ran, from its first control step to its last
+            (with the progress updates between its chunks): what real-time factors divide.
+        load_time: seconds before the loop: the reference sampled, the disturbances drawn
+            and the compiled loop loaded (numba's dispatch, and on a process's first flight
+            a load from numba's cache or a compile), a one-off cost apart from
+            ``wall_time``.
         rotor_energy: the rotors' aerodynamic work over the flight, J: the drag torque
             times the speed of each rotor, ``k_m w^3``, summed over the four and integrated
             over the recorded samples (trapezoids); a measure to compare flights by, not a
@@ -66,6 +71,7 @@ class Flight:
     max_velocity_error: float
     mixer_saturation: float
     wall_time: float
+    load_time: float
     rotor_energy: float
     floor_speed: float | None = None
     info: dict = field(default_factory=dict)
