@@ -137,6 +137,11 @@ def _flown_alone(row: dict) -> Mission:
     return fly_mission(world, start, goal, row["margin_m"], settings)
 
 
+def _short_of_margin(mission: Mission) -> bool:
+    """Whether the flight kept less than the asked margin off the legs."""
+    return mission.metrics()["flight_margin_m"] < mission.problem.margin
+
+
 def test_a_batch_gives_the_rows_rates_tables_and_page_of_its_missions_flown_one_by_one(batch):
     _, out, run, written = batch
     rows = read_rows(out / "results.csv")
@@ -158,7 +163,13 @@ def test_a_batch_gives_the_rows_rates_tables_and_page_of_its_missions_flown_one_
         members = [m for row, m in zip(rows, alone, strict=True) if row["map"] == group["map"]]
         assert group["n"] == len(members) == 3
         assert group["successes"] == sum(m.success for m in members)
+        assert group["short_of_margin"] == sum(_short_of_margin(m) for m in members)
         assert (group["ci_low"], group["ci_high"]) == wilson_interval(group["successes"], 3)
+    # flights that kept less margin than asked, counted apart from success: the test batch
+    # has both kinds, each with a margin of a millimetre or more
+    short = [m for m in alone if _short_of_margin(m)]
+    assert 0 < len(short) < MISSIONS and summary["short_of_margin"] == len(short)
+    assert all(abs(row["flight_margin_m"] - row["margin_m"]) > 0.001 for row in rows)
     # the map without a start and goal: each seed drew its own, recorded in the row
     drawn = [row for row in rows if row["start_goal_drawn"]]
     assert [row["map"].endswith("pillar.txt") for row in drawn] == [True] * 3
@@ -178,6 +189,7 @@ def test_a_batch_gives_the_rows_rates_tables_and_page_of_its_missions_flown_one_
     assert "http://" not in page and "https://" not in page
     assert page.count('src="data:image/png;base64,') == 2
     assert "Success rate" in page and "Distributions" in page and "pillar.txt" in page
+    assert f"{len(short)} kept less margin than asked off the legs" in page
 
 
 def test_a_rerun_skips_every_finished_mission_and_another_batch_is_refused(batch, tmp_path):

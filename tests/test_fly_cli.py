@@ -173,3 +173,86 @@ def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(tmp_path):
     parameters = json.loads((tmp_path / "windy/parameters.json").read_text())
     assert parameters["simulation"]["wind"] == [0.03, 0.0, 0.0]
     assert parameters["simulation"]["gust_std"] == 0.01
+
+
+# ------------------------------------------------------------------- the margin kept
+#: A flight that keeps clearly less than the 0.2 m margin asked (0.186 m, 14 mm short),
+#: and SMALL, which keeps clearly more (0.230 m).
+SHORT_OF_MARGIN = "window:seed=17"
+
+
+def test_a_flight_short_of_the_margin_says_so_in_a_warning_and_strict_fails_it(tmp_path):
+    result = run_here("fly", SHORT_OF_MARGIN, "-o", tmp_path / "out", "--quiet",
+                      "--no-figures")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    kept, asked = metrics["flight_margin_m"], metrics["margin_m"]
+    assert metrics["success"] and kept < asked - 0.01
+    assert metrics["margin_shortfall_m"] == pytest.approx(asked - kept)
+    # the place named is the flight's record at the time it kept the least
+    when = metrics["flight_margin_time_s"]
+    flight = np.loadtxt(tmp_path / "out/flight.csv", delimiter=",", skiprows=1)
+    place = flight[np.argmin(np.abs(flight[:, 0] - when)), 1:4]
+    assert [line for line in result.stderr.splitlines() if "margin asked" in line] == [
+        f"quadnav: warning: the flight kept only {kept:.3f} m of the 0.2 m margin asked off "
+        f"the legs ({asked - kept:.3g} m short), least at t = {when:.2f} s near "
+        f"({', '.join(f'{v:.2f}' for v in place)})"]
+
+    strict = run_here("fly", SHORT_OF_MARGIN, "-o", tmp_path / "strict", "--quiet",
+                      "--no-figures", "--strict")
+    assert strict.returncode == 1
+    assert strict.stderr.splitlines()[-1] == (
+        "quadnav: flight failed: it kept less margin than asked (--strict)")
+
+
+def test_a_flight_that_keeps_the_margin_gives_no_warning_even_when_strict(tmp_path):
+    result = run_here("fly", SMALL, "-o", tmp_path / "out", "--quiet", "--no-figures",
+                      "--strict")
+    assert result.returncode == 0, result.stderr
+    assert "margin asked" not in result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert metrics["flight_margin_m"] > metrics["margin_m"] + 0.01
+    assert metrics["margin_shortfall_m"] == 0.0
+
+
+def test_any_shortfall_counts_however_small():
+    from quadnav.mission import margin_shortfall
+
+    assert margin_shortfall(0.2, 0.2 - 1e-9) > 0.0
+    assert margin_shortfall(0.2, 0.2) == margin_shortfall(0.2, 0.25) == 0.0
+    assert margin_shortfall(0.12, 0.083) == pytest.approx(0.037)
+
+
+# ------------------------------------------------------------------------- the floor
+def _p2b(shared_maps) -> list:
+    """The real Tello lab map with its start and goal on the floor (z = 0)."""
+    return [shared_maps / "rbe595/p2b_map1.txt", "--start-goal",
+            shared_maps / "rbe595/p2b_startandgoal_map1.txt"]
+
+
+@pytest.mark.parametrize("controller", [[], ["--controller", "se3", "--control-rate", "100"]])
+def test_a_take_off_and_a_landing_on_the_floor_where_the_plan_has_them_are_no_crash(
+        tmp_path, shared_maps, controller):
+    result = run_here("fly", *_p2b(shared_maps), *controller, "-o", tmp_path / "out",
+                      "--quiet", "--no-figures")
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert metrics["success"] and metrics["ending"] == "completed"
+    # it lands on the floor (SE(3) at 100 Hz a little early, where the plan descends the
+    # last centimetres into the goal) at a tenth of a metre per second or so
+    assert 0.0 < metrics["floor_touch_speed_m_s"] < 0.2
+
+
+def test_a_gust_that_slams_the_vehicle_into_the_floor_is_a_crash(tmp_path, shared_maps):
+    # 0.2 N gusts (a quarter of the Tello's weight): this seed pushes it into the floor at
+    # 0.95 m/s as it descends to the goal; before floor contact counted, it flew on and
+    # ended 3.4 cm from the goal, a success
+    result = run_here("fly", *_p2b(shared_maps), "--gusts", "0.2", "--seed", "6",
+                      "-o", tmp_path / "out", "--quiet", "--no-figures")
+    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    assert result.returncode == 1
+    assert not metrics["success"] and metrics["ending"] == "hit the floor"
+    assert metrics["floor_touch_speed_m_s"] > 0.85 and not metrics["collision"]
+    assert result.stderr.splitlines()[-1] == (
+        f"quadnav: flight failed: hit the floor at {metrics['floor_touch_speed_m_s']:.2f} m/s "
+        f"at t = {metrics['contact_time_s']:.2f} s")

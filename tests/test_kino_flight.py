@@ -179,6 +179,19 @@ def test_kino_fly_ends_within_the_goal_radius_of_the_goal_asked_for(which, tmp_p
     assert json.loads((out / "kino.json").read_text())["flight"]["reached_goal"]
 
 
+def test_a_kino_flight_short_of_the_margin_says_so_and_strict_fails_it(tmp_path, capsys):
+    # window (seed 0): the flight keeps 0.168 m of the 0.2 m margin, 32 mm short
+    code = main(["kino", "quadrotor", "window", "--fly", "--quiet", "--strict",
+                 "-o", str(tmp_path / "kino")])
+    err = capsys.readouterr().err.splitlines()
+    metrics = json.loads((tmp_path / "kino" / "flight" / "metrics.json").read_text())
+    assert metrics["margin_shortfall_m"] > 0.02
+    assert code == 1
+    assert err[-2].startswith(f"quadnav: warning: the flight kept only "
+                              f"{metrics['flight_margin_m']:.3f} m of the 0.2 m margin asked")
+    assert err[-1] == "quadnav: flight failed: it kept less margin than asked (--strict)"
+
+
 def test_a_bad_vehicle_file_is_refused_before_planning(tmp_path, capsys):
     out = tmp_path / "kino"
     code = main(["kino", "quadrotor", "forest", "--fly", "--params", str(tmp_path / "no.toml"),

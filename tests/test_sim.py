@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -10,7 +12,7 @@ import pytest
 from quadnav.sim.collision import boxes_touch
 from quadnav.sim.flight import Ending
 from quadnav.sim.settings import SimSettings
-from quadnav.sim.simulate import simulate
+from quadnav.sim.simulate import CHUNK_SECONDS, simulate
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import hold_trajectory
 from quadnav.vehicle import quaternion
@@ -90,6 +92,35 @@ def test_a_takeoff_from_the_floor_is_no_collision():
     assert flight.final_error < 0.01
 
 
+OPEN = World(np.array([-1.0, -3.0, 0.0, 6.0, 3.0, 4.0]))  # no blocks, the floor at z = 0
+
+
+def test_hitting_the_floor_at_speed_is_a_crash_not_a_completed_flight():
+    # a reference that dips 0.3 m below the floor and comes back up: the floor stops the
+    # vehicle at 1.5 m/s, where the plan is 0.3 m under it (the flight went on, and ended
+    # at the goal, before floor contact counted)
+    dip = make_trajectory(np.array([[0.0, 0.0, 1.5], [2.0, 0.0, -0.3], [4.0, 0.0, 1.5]]),
+                          TrajectorySettings(v_max=2.0))
+    flight = simulate(dip, TELLO, world=OPEN)
+    assert flight.ending is Ending.FLOOR
+    assert flight.floor_speed > 2 * SimSettings().touchdown_speed
+    assert flight.position[-1, 2] == 0.0 and flight.contact_block is None
+    low = dip.position(np.linspace(0.0, dip.duration, 2001))[:, 2]
+    assert flight.contact_time < dip.duration / 2 + 0.2 and low.min() < -0.25
+    # the same dip with the floor allowed to be met anywhere at any speed flies on
+    anyhow = simulate(dip, TELLO, world=OPEN, settings=SimSettings(touchdown_speed=np.inf,
+                                                                    goal_tolerance=1.0))
+    assert anyhow.ending is Ending.COMPLETED and anyhow.floor_speed == flight.floor_speed
+
+
+def test_a_landing_where_the_plan_lands_is_no_crash():
+    landing = _straight([4.0, 2.0, 1.5], [4.0, 0.0, 0.0])
+    flight = simulate(landing, TELLO, world=OPEN)
+    assert flight.ending is Ending.COMPLETED and flight.final_error < 0.01
+    assert 0.0 < flight.floor_speed < 0.5 * SimSettings().touchdown_speed
+    assert flight.position[-1, 2] == 0.0
+
+
 def test_tracking_statistics_cover_every_control_step():
     trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
     flight = simulate(trajectory, TELLO, world=WORLD, settings=SimSettings(record_rate=1000.0))
@@ -115,6 +146,40 @@ def test_the_same_seed_flies_the_same_flight_and_another_does_not():
     assert a.ending is Ending.COMPLETED and c.ending is Ending.COMPLETED
 
 
+def test_the_loop_is_timed_apart_from_its_loading():
+    # a controller object this process has not flown, whose loop the flight looks up and
+    # loads; the times are checked for their order only (which interval holds which), not
+    # for a speed
+    from quadnav.control.contract import Controller
+    from quadnav.control.se3 import se3_controller
+
+    se3 = se3_controller()
+    fresh = Controller("fresh", se3.step, se3.gains, se3.memory_size)
+    trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
+    stamps = []
+    began = time.perf_counter()
+    flight = simulate(trajectory, TELLO, world=WORLD, controller=fresh,
+                      progress=lambda _: stamps.append(time.perf_counter()))
+    ended = time.perf_counter()
+    assert len(stamps) >= flight.duration / CHUNK_SECONDS  # a chunk a second
+    # loading, then the loop: two disjoint intervals inside the call, the loading wholly
+    # before the first chunk ended and the loop covering every chunk
+    assert 0.0 < flight.load_time < stamps[0] - began
+    assert stamps[-1] - stamps[0] <= flight.wall_time <= ended - began - flight.load_time
+
+
+def test_the_real_time_factor_divides_the_flight_by_the_loop_alone(tmp_path):
+    from clitools import run_here
+
+    result = run_here("track", "hover", "--no-figures", "--quiet", "-o", tmp_path)
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["real_time_factor"] == metrics["flight_time_s"] / metrics["sim_wall_time_s"]
+    assert metrics["sim_load_time_s"] > 0.0
+    assert (f"  wall time: loading the loop {metrics['sim_load_time_s']:.2f} s, simulation "
+            f"{metrics['sim_wall_time_s']:.2f} s ({metrics['real_time_factor']:.0f}x real time)"
+            in result.stdout.splitlines())
+
+
 def test_slower_control_than_physics_still_tracks():
     trajectory = _straight([0.0, -2.0, 1.0], [5.0, -2.5, 2.0], speed=2.0)
     settings = SimSettings(physics_rate=2000.0, control_rate=250.0)
@@ -127,6 +192,7 @@ def test_slower_control_than_physics_still_tracks():
     ({"physics_rate": 1500.0}, "whole multiple"),
     ({"record_rate": 2000.0}, "must not exceed the control rate"),
     ({"goal_tolerance": 0.0}, "goal tolerance"),
+    ({"touchdown_speed": 0.0}, "touchdown speed must be > 0 m/s"),
     ({"gust_std": -1.0}, "gust_std: expected from 0 to 100 N"),
     ({"physics_rate": 1e9}, "physics rate: expected from 10 to 100,000 Hz"),
     ({"settle_time": 1e9}, "settle time: expected from 0 to 60 s"),

@@ -33,3 +33,7 @@ class MapWarning(UserWarning):
 
 class PlanningWarning(UserWarning):
     """A planning query was adjusted (e.g. a start inside the safety margin)."""
+
+
+class ControlWarning(UserWarning):
+    """A controller flown at settings it barely suits (e.g. a slow control rate)."""

@@ -33,6 +33,7 @@ from scipy.interpolate import PPoly
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.sampling import check_control_rate
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.result import KinoResult
@@ -148,7 +149,8 @@ class KinoFlight:
     def measured(self) -> dict:
         """The flight's part of :meth:`metrics` (:func:`~quadnav.mission.measure_flight`:
         the margins measured exactly, the tracking statistics), measured once."""
-        return measure_flight(self.world, self.trajectory, self.flight, self.settings)
+        return measure_flight(self.world, self.trajectory, self.flight, self.settings,
+                              self.world.margin or 0.0)
 
     def parameters(self) -> dict:
         """Every setting the plan and the flight ran with, JSON-ready."""
@@ -183,7 +185,9 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         progress: called with the fraction of the flight simulated.
 
     Raises:
-        QuadnavError: no plan, or one that does not end at rest at ``world.goal``.
+        QuadnavError: no plan, one that does not end at rest at ``world.goal``, or a
+            control rate too slow for the controller's gains
+            (:func:`~quadnav.control.sampling.check_control_rate`).
     """
     vehicle = vehicle or load_params()
     gains = gains or load_gains(preset=vehicle.gains)
@@ -194,8 +198,9 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         raise QuadnavError(f"the plan ends at {format_point(end)}, not at the goal "
                            f"{'(none)' if world.goal is None else format_point(world.goal)} "
                            f"of {world.name}")
-    flight = simulate(trajectory, vehicle, gains, world, settings, progress,
-                      controller=CONTROLLERS.get(controller)(gains))
+    flown_by = CONTROLLERS.get(controller)(gains)
+    check_control_rate(flown_by, vehicle, settings.control_rate)
+    flight = simulate(trajectory, vehicle, gains, world, settings, progress, controller=flown_by)
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,
                       controller, settings)
 

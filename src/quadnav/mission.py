@@ -23,6 +23,7 @@ from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
@@ -33,7 +34,12 @@ from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.space import SafeSpace, trajectory_margins, windowed_margins
+from quadnav.trajectory.space import (
+    SafeSpace,
+    trajectory_margins,
+    windowed_margins,
+    within_window,
+)
 from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.margins import segment_box_margins
@@ -75,7 +81,10 @@ class MissionSettings:
         gains: the cascade's gains (the PX4-style controller).
         controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
             ``cascade``, ``se3`` or one registered).
-        sim: rates, stopping and success rules, disturbances, seed.
+        sim: rates, stopping and success rules, disturbances, seed. A control rate too
+            slow for the controller's gains on the flown vehicle is refused, one that
+            leaves them little margin warned about
+            (:func:`~quadnav.control.sampling.check_control_rate`).
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
             its model, unaware of the difference.
@@ -93,7 +102,8 @@ class MissionSettings:
     plant: VehicleParams | None = None
 
     def __post_init__(self) -> None:
-        CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
+        factory = CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
+        check_control_rate(factory(self.gains), self.flown_vehicle, self.sim.control_rate)
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -111,7 +121,8 @@ class Mission:
         raw_length: path length before refinement, m (inf without a path).
         trajectory: the reference flown (None without a path).
         flight: the simulated flight (None without a path).
-        timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``.
+        timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``
+            (the closed loop alone; its loading is the flight's ``load_time``).
         settings: what the mission ran with.
     """
 
@@ -176,20 +187,43 @@ class Mission:
         if self.trajectory is None or self.flight is None:
             return {"collision": False, "reached_goal": False}
         return measure_flight(self.problem.world, self.trajectory, self.flight,
-                              self.settings.sim)
+                              self.settings.sim, self.problem.margin)
 
 
 def measure_flight(world: World, trajectory: Trajectory, flight: Flight,
-                   settings: SimSettings) -> dict:
+                   settings: SimSettings, margin: float) -> dict:
     """The flight's part of :meth:`Mission.metrics`: the margin (per axis, m) kept from the
     real blocks and the boundary, measured exactly, by the trajectory and by the flight,
-    off the legs and on them (None without legs), and :func:`flight_metrics`."""
+    off the legs and on them (None without legs), how much less than the asked ``margin``
+    m the flight kept off the legs (:func:`margin_shortfall`) and when it kept the least
+    (:func:`least_margin_time`), and :func:`flight_metrics`. The flown track is taken as
+    straight between its records, each such stretch measured by its bounding box."""
     off, on = trajectory_margins(trajectory, world)
-    flown_off, flown_on = track_margins(flight.t, flight.position, world,
-                                        trajectory.main_window)
+    stretches = segment_box_margins(world, flight.position)
+    window = trajectory.main_window
+    flown_off, flown_on = windowed_margins(flight.t, stretches, window)
     return {"trajectory_margin_m": off, "trajectory_leg_margin_m": on,
             "flight_margin_m": flown_off, "flight_leg_margin_m": flown_on,
+            "margin_shortfall_m": margin_shortfall(margin, flown_off),
+            "flight_margin_time_s": least_margin_time(flight.t, stretches, window),
             } | flight_metrics(flight, world, settings)
+
+
+def margin_shortfall(asked: float, kept: float) -> float:
+    """How much less than the ``asked`` margin a flight ``kept`` off the legs, m: 0 when it
+    kept all of it; any shortfall, however small, is more than 0."""
+    return asked - kept if kept < asked else 0.0
+
+
+def least_margin_time(t: FloatArray, stretches: FloatArray, window: tuple[float, float]
+                      ) -> float | None:
+    """When a track at times ``t`` (K,) s kept its least margin within ``window`` (off the
+    legs): the start, s, of the stretch (of ``stretches`` (K - 1,), m) that kept the least;
+    None when no stretch lies within the window."""
+    within = within_window(t, window)
+    if not within.any():
+        return None
+    return float(t[:-1][within][np.argmin(stretches[within])])
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
@@ -206,16 +240,6 @@ def min_clearance(flight: Flight, world: World) -> float | None:
     return float(open_world.clearances(flight.position).min())
 
 
-def track_margins(t: FloatArray, positions: FloatArray, world: World,
-                  window: tuple[float, float]) -> tuple[float, float | None]:
-    """The margin (per axis, m) a flown track keeps from the real blocks and boundary,
-    ``(within window, outside it)``, the second None when nothing was flown outside it.
-
-    The track is times ``t`` (N,) s and positions (N, 3) m; between two samples it is
-    taken as straight, and each such piece is measured by its bounding box."""
-    return windowed_margins(t, segment_box_margins(world, positions), window)
-
-
 def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
     """The flight's part of :meth:`Mission.metrics`."""
     return {
@@ -224,6 +248,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "ending": flight.ending.value,
         "contact_time_s": flight.contact_time,
         "contact_block": flight.contact_block,
+        "floor_touch_speed_m_s": flight.floor_speed,
         "final_error_m": flight.final_error,
         "goal_tolerance_m": settings.goal_tolerance,
         "flight_time_s": flight.duration,
@@ -233,6 +258,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "min_clearance_m": min_clearance(flight, world),
         "mixer_saturation": flight.mixer_saturation,
         "rotor_energy_j": flight.rotor_energy,
+        "sim_load_time_s": flight.load_time,
         "sim_wall_time_s": flight.wall_time,
         "real_time_factor": flight.duration / flight.wall_time if flight.wall_time else None,
     }

@@ -20,6 +20,7 @@ import numpy as np
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.sampling import check_control_rate
 from quadnav.mission import flight_metrics, flight_succeeded
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
@@ -184,7 +185,8 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
 
     Raises:
         QuadnavError: a flight too long for the rates (see
-            :func:`~quadnav.sim.simulate.flight_steps`).
+            :func:`~quadnav.sim.simulate.flight_steps`), or a control rate too slow for
+            the controller's gains (:func:`~quadnav.control.sampling.check_control_rate`).
     """
     vehicle = vehicle or load_params()
     gains = gains or load_gains(preset=vehicle.gains)
@@ -192,6 +194,7 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
     if isinstance(reference, StepReference) and reference.is_step:
         settings = settings.replace(record_rate=settings.control_rate)
     world = track_world(reference)
-    flight = simulate(reference, vehicle, gains, world, settings, progress,
-                      controller=CONTROLLERS.get(controller)(gains))
+    flown_by = CONTROLLERS.get(controller)(gains)
+    check_control_rate(flown_by, vehicle, settings.control_rate)
+    flight = simulate(reference, vehicle, gains, world, settings, progress, controller=flown_by)
     return Tracking(reference, world, flight, vehicle, gains, settings, controller)

@@ -23,7 +23,7 @@ from quadnav.control.gains import Gains, load_gains
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.mission import Mission, MissionSettings, fly_problem
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
-from quadnav.sim.settings import SimSettings
+from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.timing import DEFAULT_V_MAX
 from quadnav.vehicle.params import VehicleParams, load_params
@@ -119,6 +119,7 @@ def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSett
         vehicle=vehicle,
         gains=context.gains[mission.gains],
         sim=SimSettings(physics_rate=fixed.physics_rate, control_rate=fixed.control_rate,
+                        record_rate=default_record_rate(fixed.control_rate),
                         settle_time=fixed.settle, wind=mission.wind, gust_std=mission.gusts,
                         seed=mission.seed),
         plant=plant)

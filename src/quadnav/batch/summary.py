@@ -4,7 +4,9 @@ and ``summary.json``.
 A group is every distinct combination of the grid values but the seed: map, speed, wind,
 gusts, spread, planner and gains, and the start, goal and margin when they were given
 (not drawn from each seed). Success is the mission's own: the goal reached within the
-tolerance with no contact; a refused mission counts as a failure.
+tolerance with no contact; a refused mission counts as a failure. Apart from it, each rate
+counts the flights that kept less margin than asked off the legs (``margin_shortfall_m``
+above 0, by any amount), successes or not.
 """
 
 from __future__ import annotations
@@ -53,13 +55,15 @@ def group_values(row: dict[str, Any]) -> dict[str, Any]:
 
 def rate(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """``n``, ``successes``, ``success_rate`` and its Wilson 95 % ``ci_low``, ``ci_high``,
-    and ``errors`` (refused missions) of ``rows``."""
+    ``errors`` (refused missions) and ``short_of_margin`` (flights that kept less margin
+    than asked off the legs) of ``rows``."""
     n = len(rows)
     successes = sum(bool(row["success"]) for row in rows)
     low, high = wilson_interval(successes, n) if n else (None, None)
     return {"n": n, "successes": successes, "success_rate": successes / n if n else None,
             "ci_low": low, "ci_high": high,
-            "errors": sum(row["error"] is not None for row in rows)}
+            "errors": sum(row["error"] is not None for row in rows),
+            "short_of_margin": sum(bool(row["margin_shortfall_m"]) for row in rows)}
 
 
 def _median(rows: Sequence[dict[str, Any]], name: str) -> float | None:

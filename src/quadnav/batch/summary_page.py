@@ -292,12 +292,14 @@ def _breakable(text: str) -> str:
 
 def groups_table(labels: _Groups) -> str:
     """The groups as an HTML table: what tells them apart, n, successes, the rate and its
-    interval (percent), refused missions and the medians."""
+    interval (percent), refused missions, flights short of the margin and the medians."""
     header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
+              _breakable("kept less margin"),
               *(_breakable(f"median {name}") for name in MEDIAN_COLUMNS))
     rows = [(_breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
              _percent(g["success_rate"]),
              f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
+             str(g["short_of_margin"]),
              *(_cell(g[f"median_{name}"]) for name in MEDIAN_COLUMNS))
             for g in labels.groups]
     return html_table(header, rows, -1)
@@ -313,8 +315,9 @@ def summary_html(summary: dict[str, Any], rows: Sequence[dict[str, Any]], folder
     overall = (f"<p><b>{summary['successes']} of {summary['finished']}</b> missions reached "
                f"the goal with no contact: {_percent(summary['success_rate'])} % (95 % "
                f"interval {_percent(summary['ci_low'])}&ndash;{_percent(summary['ci_high'])} %)"
-               f"{html.escape(state)}; {summary['errors']} refused (bad query or settings)."
-               "</p>")
+               f"{html.escape(state)}; {summary['errors']} refused (bad query or settings); "
+               f"{summary['short_of_margin']} kept less margin than asked off the legs (by "
+               "any amount).</p>")
     body = [f"<h1>quadnav batch summary</h1><p class=\"muted\">folder "
             f"{html.escape(str(folder))}; written by quadnav {__version__}. A success is a "
             "mission that reached the goal within the tolerance with no contact; a refused "

@@ -53,21 +53,23 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("path_length_m", FLOAT), ("path_vertices", INT), ("planning_time_s", FLOAT),
     ("trajectory_time_s", FLOAT), ("trajectory_duration_s", FLOAT),
     ("trajectory_margin_m", FLOAT), ("trajectory_leg_margin_m", FLOAT),
-    ("flight_margin_m", FLOAT), ("flight_leg_margin_m", FLOAT), ("collision", BOOL),
+    ("flight_margin_m", FLOAT), ("flight_leg_margin_m", FLOAT), ("margin_shortfall_m", FLOAT),
+    ("flight_margin_time_s", FLOAT), ("collision", BOOL),
     ("reached_goal", BOOL), ("ending", STR), ("contact_time_s", FLOAT), ("contact_block", INT),
+    ("floor_touch_speed_m_s", FLOAT),
     ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
     ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
     ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),
     ("rotor_energy_j", FLOAT),
-    ("sim_wall_time_s", FLOAT), ("real_time_factor", FLOAT),
+    ("sim_load_time_s", FLOAT), ("sim_wall_time_s", FLOAT), ("real_time_factor", FLOAT),
 )
 #: Every column, in order, with its type.
 COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("error", STR))
 NAMES = tuple(name for name, _ in COLUMNS)
 TYPES = dict(COLUMNS)
 #: Columns of wall time, which differ between runs of the same mission.
-WALL_TIME_COLUMNS = ("planning_time_s", "trajectory_time_s", "sim_wall_time_s",
-                     "real_time_factor")
+WALL_TIME_COLUMNS = ("planning_time_s", "trajectory_time_s", "sim_load_time_s",
+                     "sim_wall_time_s", "real_time_factor")
 RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
 

@@ -126,7 +126,8 @@ def batch(args: argparse.Namespace) -> int:
     print(f"{overall['successes']} of {overall['n']} missions reached the goal with no "
           f"contact: {100 * overall['success_rate']:.1f} % (95 % interval "
           f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
-          f"{overall['errors']} refused")
+          f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
+          "asked")
     print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
     print("wrote " + ", ".join(str(folder / name) for name in written))
     return 0

@@ -12,7 +12,7 @@ from quadnav.control.gains import Gains, course_gain_names, load_gains
 from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
 from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
-from quadnav.sim.settings import SimSettings
+from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
 
@@ -83,8 +83,16 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
                                           f"(default: {SimSettings.settle_time:g})")
 
 
+def add_strict_argument(parser: argparse.ArgumentParser) -> None:
+    """--strict: a flight that kept less margin than asked fails (exit 1)."""
+    parser.add_argument("--strict", action="store_true",
+                        help="exit 1 when the flight kept less margin than asked off the legs, "
+                             "by any amount (a warning line says so either way)")
+
+
 def simulation_settings(args: argparse.Namespace) -> SimSettings:
     """The settings of :func:`add_simulation_arguments` and ``--seed``."""
     return SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
+                       record_rate=default_record_rate(args.control_rate),
                        settle_time=args.settle, wind=args.wind, gust_std=args.gusts,
                        seed=args.seed)

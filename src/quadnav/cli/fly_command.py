@@ -22,12 +22,19 @@ from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import (
     add_controller_argument,
     add_simulation_arguments,
+    add_strict_argument,
     add_timing_arguments,
     add_vehicle_arguments,
     simulation_settings,
     vehicle_and_gains,
 )
-from quadnav.cli.flight_lines import min_clearance, tracking_errors
+from quadnav.cli.flight_lines import (
+    STRICT_FAILURE,
+    min_clearance,
+    simulation_time,
+    tracking_errors,
+    warn_margin_shortfall,
+)
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.limits import ACCELERATION, SPEED
@@ -44,7 +51,7 @@ from quadnav.planning import get_planner, make_problem
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
-from quadnav.sim.flight import Flight
+from quadnav.sim.flight import Ending, Flight
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
@@ -79,17 +86,23 @@ def fly(args: argparse.Namespace) -> int:
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
-    return write_mission(mission, folder, figures=not args.no_figures, html=args.html)
+    return write_mission(mission, folder, figures=not args.no_figures, html=args.html,
+                         strict=args.strict)
 
 
-def write_mission(mission: Mission, folder: Path, figures: bool, html: bool) -> int:
+def write_mission(mission: Mission, folder: Path, figures: bool, html: bool,
+                  strict: bool = False) -> int:
     """Write the run folder of ``mission``, print its summary; returns the exit code: 0 when
-    it reached the goal cleanly, else :data:`EXIT_FAILED` (saying why on stderr)."""
+    it reached the goal cleanly (and, if ``strict``, kept the whole margin asked), else
+    :data:`EXIT_FAILED` (saying why on stderr)."""
     written = write_run(mission, folder, figures=figures, html=html)
-    print_summary(mission)
+    short = print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not mission.success:
         print(f"quadnav: flight failed: {failure_reason(mission)}", file=sys.stderr)
+        return EXIT_FAILED
+    if strict and short:
+        print(f"quadnav: flight failed: {STRICT_FAILURE}", file=sys.stderr)
         return EXIT_FAILED
     return 0
 
@@ -102,19 +115,22 @@ def failure_reason(mission: Mission) -> str:
 
 
 def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
-    """One line saying why a flight failed: a collision, leaving the map, diverging, or
-    ending more than ``goal_tolerance`` m from ``goal``."""
+    """One line saying why a flight failed: a collision, hitting the floor, leaving the map,
+    diverging, or ending more than ``goal_tolerance`` m from ``goal``."""
     if flight.contact_block is not None:
         return (f"collided with block {flight.contact_block} at t = "
                 f"{flight.contact_time:.2f} s")
+    if flight.ending is Ending.FLOOR:
+        return f"hit the floor at {flight.floor_speed:.2f} m/s at t = {flight.contact_time:.2f} s"
     if flight.contact_time is not None:
         return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
     return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
             f"{100 * goal_tolerance:.0f} cm)")
 
 
-def print_summary(mission: Mission) -> None:
-    """Print the outcome and headline figures of ``mission``, a few lines."""
+def print_summary(mission: Mission) -> bool:
+    """Print the outcome and headline figures of ``mission``, a few lines, and a warning
+    line on stderr when the flight kept less margin than asked; returns whether it did."""
     m = mission.metrics()
     controller = mission.settings.controller
     flown_by = "" if controller == DEFAULT_CONTROLLER else f", controller {controller}"
@@ -122,7 +138,7 @@ def print_summary(mission: Mission) -> None:
           f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, top speed {m['speed_m_s']:.3g} m/s")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
-        return
+        return False
     print(f"  path {m['path_length_m']:.2f} m, trajectory {m['trajectory_duration_s']:.2f} s, "
           f"flight {m['ending']} after {m['flight_time_s']:.2f} s")
     print(f"  {tracking_errors(m)}; {min_clearance(m)}")
@@ -130,9 +146,10 @@ def print_summary(mission: Mission) -> None:
             f"; on the legs out of it {m['trajectory_leg_margin_m']:.3f} m")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the trajectory and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m){legs}")
+    short = warn_margin_shortfall(m, mission.flight.t, mission.flight.position)
     print(f"  wall time: planning {m['planning_time_s']:.2f} s, trajectory "
-          f"{m['trajectory_time_s']:.2f} s, simulation {m['sim_wall_time_s']:.2f} s "
-          f"({m['real_time_factor']:.0f}x real time)")
+          f"{m['trajectory_time_s']:.2f} s, {simulation_time(m)}")
+    return short
 
 
 def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
@@ -147,7 +164,8 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
                     f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
                     "reaches the goal without touching a block; 1 on a collision, a missed "
-                    "goal or no path (metrics.json is still written); 2 on bad input.")
+                    "goal or no path (metrics.json is still written), and with --strict "
+                    "when the flight kept less margin than asked; 2 on bad input.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
@@ -164,5 +182,6 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
     add_controller_argument(p)
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
     add_simulation_arguments(p)
+    add_strict_argument(p)
     add_run_output_arguments(p, "flight", REPORT)
     p.set_defaults(handler=fly)

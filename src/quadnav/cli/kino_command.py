@@ -56,6 +56,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import (
     add_controller_argument,
+    add_strict_argument,
     add_vehicle_arguments,
     vehicle_and_gains,
 )
@@ -350,7 +351,7 @@ def quadrotor(args: argparse.Namespace) -> int:
     code = finish(folder, world.name, [(sampling(settings), result)], written)
     if flown is None:
         return code
-    return write_flight(flown, folder / FLIGHT_FOLDER)
+    return write_flight(flown, folder / FLIGHT_FOLDER, args.strict)
 
 
 def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
@@ -367,10 +368,16 @@ def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
                              args.controller, progress)
 
 
-def write_flight(flown: KinoFlight, folder: Path) -> int:
-    """Write the run folder of the flight, print its headline figures; 0 when it
-    succeeded, else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
-    from quadnav.cli.flight_lines import min_clearance, tracking_errors
+def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
+    """Write the run folder of the flight, print its headline figures (and a warning line
+    when it kept less margin than asked); 0 when it succeeded (and, if ``strict``, kept the
+    whole margin), else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
+    from quadnav.cli.flight_lines import (
+        STRICT_FAILURE,
+        min_clearance,
+        tracking_errors,
+        warn_margin_shortfall,
+    )
     from quadnav.cli.fly_command import flight_failure
     from quadnav.report.run_writer import write_run
     from quadnav.runs import RunContent
@@ -388,10 +395,14 @@ def write_flight(flown: KinoFlight, folder: Path) -> int:
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
           f"rotor energy {m['rotor_energy_j']:.1f} J")
+    short = warn_margin_shortfall(m, flown.flight.t, flown.flight.position)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if not m["success"]:
         print(f"quadnav: flight failed: "
               f"{flight_failure(flown.flight, flown.settings.goal_tolerance)}", file=sys.stderr)
+        return EXIT_NOT_REACHED
+    if strict and short:
+        print(f"quadnav: flight failed: {STRICT_FAILURE}", file=sys.stderr)
         return EXIT_NOT_REACHED
     return 0
 
@@ -481,6 +492,7 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--fly", action="store_true",
                    help="also fly the plan closed loop on the simulated vehicle and write "
                         "its run folder to DIR/flight (exit 1 if the flight fails)")
+    add_strict_argument(p)
     add_vehicle_arguments(p)
     add_controller_argument(p)
     p.set_defaults(handler=quadrotor)

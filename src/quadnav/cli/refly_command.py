@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from quadnav.cli.commands import command_help
+from quadnav.cli.flight_args import add_strict_argument
 from quadnav.cli.fly_command import write_mission
 from quadnav.errors import QuadnavError
 from quadnav.runfolder import check_output_folder
@@ -39,7 +40,8 @@ def refly(args: argparse.Namespace) -> int:
         raise QuadnavError(f"{folder}: a map, gains or vehicle file of the batch changed "
                            "since it ran: the mission would not fly as it did")
     mission = fly_mission_spec(context, missions[key])
-    return write_mission(mission, output, figures=not args.no_figures, html=args.html)
+    return write_mission(mission, output, figures=not args.no_figures, html=args.html,
+                         strict=args.strict)
 
 
 def add_refly_command(subparsers: argparse._SubParsersAction) -> None:
@@ -55,6 +57,7 @@ def add_refly_command(subparsers: argparse._SubParsersAction) -> None:
                    help="the row's mission_key, or its row number in results.csv (1: first)")
     p.add_argument("--no-figures", action="store_true", help=f"skip the figures and {REPORT}")
     p.add_argument("--html", action="store_true", help="also write DIR/view.html")
+    add_strict_argument(p)
     p.add_argument("-o", "--output", default="refly", metavar="DIR",
                    help="folder to write into, created if needed (default: refly)")
     p.set_defaults(handler=refly)

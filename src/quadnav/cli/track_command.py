@@ -19,7 +19,7 @@ from quadnav.cli.flight_args import (
     simulation_settings,
     vehicle_and_gains,
 )
-from quadnav.cli.flight_lines import tracking_errors
+from quadnav.cli.flight_lines import simulation_time, tracking_errors
 from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError
@@ -82,8 +82,7 @@ def _print_summary(m: dict) -> None:
           f"{100 * m['mixer_saturation']:.1f} % of steps")
     if "overshoot_percent" in m:
         print(f"  {step_summary(m)}")
-    print(f"  wall time: simulation {m['sim_wall_time_s']:.2f} s "
-          f"({m['real_time_factor']:.0f}x real time)")
+    print(f"  wall time: {simulation_time(m)}")
 
 
 def add_track_command(subparsers: argparse._SubParsersAction) -> None:

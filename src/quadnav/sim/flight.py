@@ -17,6 +17,7 @@ class Ending(Enum):
     COLLISION = "collision"  # the body box touched a real block
     LEFT_BOUNDARY = "left boundary"  # the centre left the map's boundary
     DIVERGED = "diverged"  # a non-finite state or the vehicle upside down
+    FLOOR = "hit the floor"  # met the floor too fast, or where the reference is above it
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,7 +32,8 @@ class Flight:
             acceleration m/s^2, yaw rad, yaw rate rad/s.
         goal: (3,) where the trajectory ends, m.
         ending: why it stopped.
-        contact_time: when it collided, left the boundary or diverged, s (else None).
+        contact_time: when it collided, left the boundary, diverged or hit the floor, s
+            (else None).
         contact_block: row of the real block touched, for a collision (else None).
         rms_tracking_error: root mean square of the position error over every control
             step, m.
@@ -39,11 +41,20 @@ class Flight:
         max_velocity_error: largest velocity error at any control step, m/s.
         mixer_saturation: fraction of control steps at which the mixer had to change
             the wrench.
-        wall_time: seconds the simulation took.
+        wall_time: seconds the closed loop ran, from its first control step to its last
+            (with the progress updates between its chunks): what real-time factors divide.
+        load_time: seconds before the loop: the reference sampled, the disturbances drawn
+            and the compiled loop loaded (numba's dispatch, and on a process's first flight
+            a load from numba's cache or a compile), a one-off cost apart from
+            ``wall_time``.
         rotor_energy: the rotors' aerodynamic work over the flight, J: the drag torque
             times the speed of each rotor, ``k_m w^3``, summed over the four and integrated
             over the recorded samples (trapezoids); a measure to compare flights by, not a
             battery's drain (motor and electronics losses are left out).
+        floor_speed: the fastest the centre met the floor, m/s (the speed the floor stopped,
+            checked at every physics step; None if it never met it): a landing or the rest
+            before a take-off, or for :attr:`Ending.FLOOR` the crash
+            (:func:`~quadnav.sim.loop.touchdown`).
         info: the settings and vehicle used, JSON-ready.
     """
 
@@ -60,7 +71,9 @@ class Flight:
     max_velocity_error: float
     mixer_saturation: float
     wall_time: float
+    load_time: float
     rotor_energy: float
+    floor_speed: float | None = None
     info: dict = field(default_factory=dict)
 
     @property

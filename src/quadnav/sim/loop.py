@@ -6,8 +6,9 @@ cost. Each control step: add the measurement noise; run the controller's step (a
 :class:`~quadnav.control.contract.Controller`, passed in as a compiled function);
 accumulate the tracking error; record every ``record_every``-th step; then ``substeps``
 RK4 steps, each followed by the stop checks (non-finite or upside-down state, centre
-outside the boundary, body box touching a real block). :func:`run_steps` is how Python
-calls it for a controller.
+outside the boundary, body box touching a real block, the floor met where the reference
+is not on it, or too fast: :func:`touchdown`). :func:`run_steps` is how Python calls it for a
+controller.
 """
 
 from __future__ import annotations
@@ -30,10 +31,12 @@ from quadnav.world.blockgrid import GridArrays
 from quadnav.world.model import World
 
 #: Stop codes returned by :func:`fly_steps` (see :class:`~quadnav.sim.flight.Ending`).
-RUNNING, COLLISION, LEFT_BOUNDARY, DIVERGED = 0, 1, 2, 3
-#: Layout of the statistics array (:data:`STATS_SIZE`,).
-SUM_SQUARED_ERROR, MAX_ERROR, MAX_VELOCITY_ERROR, STEPS, SATURATED, CONTACT_BLOCK = range(6)
-STATS_SIZE = 6
+RUNNING, COLLISION, LEFT_BOUNDARY, DIVERGED, FLOOR = 0, 1, 2, 3, 4
+#: Layout of the statistics array (:data:`STATS_SIZE`,): ``FLOOR_SPEED`` is the fastest the
+#: centre met the floor, m/s (-1: never).
+(SUM_SQUARED_ERROR, MAX_ERROR, MAX_VELOCITY_ERROR, STEPS, SATURATED, CONTACT_BLOCK,
+ FLOOR_SPEED) = range(7)
+STATS_SIZE = 7
 
 
 class Scene(NamedTuple):
@@ -43,6 +46,8 @@ class Scene(NamedTuple):
     blocks: np.ndarray  # (N, 6) real blocks, m
     grid: GridArrays  # :func:`~quadnav.sim.collision.body_grid` of the blocks
     floor_z: float  # height of the floor, m (-inf: none)
+    touchdown_speed: float  # fastest the floor may be met, m/s (inf: any speed)
+    touchdown_height: float  # highest the reference may then be above it, m (inf: any)
 
 
 class Disturbances(NamedTuple):
@@ -63,17 +68,22 @@ class Record(NamedTuple):
 
 
 def scene(world: World | None, half_size: np.ndarray, tolerance: float = 0.0,
-          floor_z: float | None = None) -> Scene:
+          floor_z: float | None = None, touchdown: tuple[float, float] = (np.inf, np.inf)
+          ) -> Scene:
     """The scene of ``world`` for a body of half sizes ``half_size`` (3,) m: its boundary
     widened by ``tolerance`` m, its blocks and their grid, its floor (its lower face, or
-    ``floor_z``). ``None``: open space without blocks, with no floor unless ``floor_z``."""
+    ``floor_z``), and how the floor may be met: ``touchdown`` (fastest m/s, highest the
+    reference may then be above the floor m; by default at any speed anywhere, see
+    :func:`touchdown`). ``None``: open space without blocks, with no floor unless
+    ``floor_z``."""
+    speed, height = (float(value) for value in touchdown)
     if world is None:
         grid = body_grid(World(np.array([-1.0, -1, -1, 1, 1, 1])), half_size)
         return Scene(np.array([-np.inf] * 3 + [np.inf] * 3), np.zeros((0, 6)), grid,
-                     -np.inf if floor_z is None else float(floor_z))
+                     -np.inf if floor_z is None else float(floor_z), speed, height)
     boundary = world.boundary + np.repeat([-1.0, 1.0], 3) * tolerance
     return Scene(boundary, np.array(world.blocks), body_grid(world, half_size),
-                 float(world.lower[2]) if floor_z is None else float(floor_z))
+                 float(world.lower[2]) if floor_z is None else float(floor_z), speed, height)
 
 
 def still_air(steps: int) -> Disturbances:
@@ -86,6 +96,7 @@ def new_record(steps: int, every: int = 1) -> Record:
     rows = (steps + every - 1) // every
     stats = np.zeros(STATS_SIZE)
     stats[CONTACT_BLOCK] = -1
+    stats[FLOOR_SPEED] = -1
     return Record(every, np.zeros((rows, STATE_SIZE)), np.zeros((rows, 4)), stats)
 
 
@@ -123,6 +134,18 @@ def _stop_code(state, v: VehicleArrays, where: Scene, stats) -> int:
 
 
 @njit(cache=True)
+def touchdown(speed: float, reference, where: Scene, stats) -> int:
+    """The floor met at ``speed`` m/s while tracking ``reference`` (11,): a landing (or the
+    rest before a take-off), RUNNING, when the reference is then on the floor (at most
+    ``where.touchdown_height`` above it) and the floor is met no faster than
+    ``where.touchdown_speed``; else a crash, FLOOR. Keeps the fastest in ``stats``."""
+    stats[FLOOR_SPEED] = max(stats[FLOOR_SPEED], speed)
+    if speed > where.touchdown_speed or reference[2] - where.floor_z > where.touchdown_height:
+        return FLOOR
+    return RUNNING
+
+
+@njit(cache=True)
 def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int,
               references: np.ndarray, v: VehicleArrays, model: VehicleArrays, g,
               substeps: int, dt_control: float, where: Scene, acting: Disturbances,
@@ -143,7 +166,8 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         g: the controller's compiled gains.
         substeps: RK4 steps per control step.
         dt_control: control period, s.
-        where: the boundary, blocks and floor (:func:`scene`).
+        where: the boundary, blocks and floor, and where the floor may be met
+            (:func:`scene`).
         acting: forces and sensor noise per control step.
         record: where the states, commands and statistics go (:func:`new_record`).
     """
@@ -172,8 +196,10 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
             for i in range(len(commands)):
                 record.commands[row, i] = commands[i]
         for _ in range(substeps):
-            rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z, work)
+            speed = rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z, work)
             code = _stop_code(state, v, where, stats)
+            if code == RUNNING and speed >= 0.0:
+                code = touchdown(speed, reference, where, stats)
             if code != RUNNING:
                 return code, k + 1 - first
     return RUNNING, last - first

@@ -22,7 +22,14 @@ class SimSettings:
         record_rate: samples kept in the flight record per second, Hz (at most the
             control rate; tracking metrics use every control step regardless).
         settle_time: time flown after the trajectory ends, s (:data:`~quadnav.limits.SETTLE`).
-        goal_tolerance: largest final distance from the goal that counts as reached, m.
+        goal_tolerance: largest final distance from the goal that counts as reached, m;
+            also the highest the reference may be above the floor where the centre meets
+            it for a take-off or a landing.
+        touchdown_speed: fastest the centre may meet the floor where the reference is on
+            it (within ``goal_tolerance``), m/s: a take-off or a landing. Meeting it
+            faster, or where the reference is higher, is a crash that ends the flight
+            (``hit the floor``). The default is the speed PX4 lands a multirotor at
+            (its ``MPC_LAND_SPEED``).
         boundary_tolerance: how far the centre may stray outside the map's boundary
             before the flight counts as having left it, m (starts and goals may lie on
             the boundary itself).
@@ -43,6 +50,7 @@ class SimSettings:
     record_rate: float = 100.0
     settle_time: float = 2.0
     goal_tolerance: float = 0.1
+    touchdown_speed: float = 0.7
     boundary_tolerance: float = 0.05
     wind: FloatArray = vector_field(0.0, 0.0, 0.0)
     gust_std: float = 0.0
@@ -76,6 +84,8 @@ class SimSettings:
              f"({self.control_rate:g} Hz)"),
             (math.isfinite(self.goal_tolerance) and self.goal_tolerance > 0,
              f"goal tolerance must be > 0 m, got {self.goal_tolerance}"),
+            (self.touchdown_speed > 0,
+             f"touchdown speed must be > 0 m/s, got {self.touchdown_speed}"),
             (math.isfinite(self.gust_period) and self.gust_period > 0,
              f"gust period must be > 0 s, got {self.gust_period}"),
         ] + [(math.isfinite(getattr(self, k)) and getattr(self, k) >= 0,
@@ -100,3 +110,9 @@ class SimSettings:
         """Whether any measurement noise is on."""
         return (self.position_noise > 0 or self.velocity_noise > 0
                 or self.attitude_noise > 0 or self.gyro_noise > 0)
+
+
+def default_record_rate(control_rate: float) -> float:
+    """The record rate for a ``control_rate`` Hz: the default, 100 Hz, or the control rate
+    when it is lower (a record is kept at most every control step)."""
+    return min(SimSettings.record_rate, control_rate)

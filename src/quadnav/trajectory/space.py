@@ -114,12 +114,18 @@ def trajectory_margins(trajectory: Trajectory, world: World, spacing: float = 0.
     return windowed_margins(t, margins, trajectory.main_window)
 
 
+def within_window(t: FloatArray, window: tuple[float, float]) -> np.ndarray:
+    """(K - 1,) whether each stretch between times ``t`` (K,) s lies wholly within
+    ``window`` (begin, end) s."""
+    return (t[:-1] >= window[0]) & (t[1:] <= window[1])
+
+
 def windowed_margins(t: FloatArray, margins: FloatArray, window: tuple[float, float]
                      ) -> tuple[float, float | None]:
     """The least of the margins (K - 1,) m of the stretches between times ``t`` (K,) s,
     ``(of those wholly within window, of the others)``, rounded to the nanometre
     (:func:`~quadnav.world.margins.rounded`; a leg from the boundary keeps 0, not a
     rounding error below it); ``inf`` for none within, None for no others."""
-    within = (t[:-1] >= window[0]) & (t[1:] <= window[1])
+    within = within_window(t, window)
     off = rounded(margins[within].min()) if within.any() else float("inf")
     return off, rounded(margins[~within].min()) if (~within).any() else None

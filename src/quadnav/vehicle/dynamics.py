@@ -15,7 +15,7 @@ indices    name        meaning
 Forces: rotor thrust along body z, gravity, linear drag ``-R D R^T v`` (``D`` the body-frame
 drag coefficients) and an external world-frame force (wind, a push). A solid floor at
 ``floor_z`` holds the centre of mass up: on touching it, the vehicle stops sinking and
-sliding and its body rates stop.
+sliding and its body rates stop; :func:`rk4_step` returns the speed it met the floor at.
 """
 
 from __future__ import annotations
@@ -138,10 +138,13 @@ def rk4_workspace() -> FloatArray:
 
 @njit(cache=True)
 def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.ndarray,
-             dt: float, floor_z: float, work: np.ndarray) -> None:
+             dt: float, floor_z: float, work: np.ndarray) -> float:
     """Advance the state ``x`` (17,) in place by ``dt`` s holding motor commands (4,) and
     force (3,) N: one RK4 step, then the quaternion renormalised and the floor applied.
-    ``work`` is :func:`rk4_workspace` (overwritten)."""
+    ``work`` is :func:`rk4_workspace` (overwritten). Returns the speed, m/s, of the centre
+    when the floor stopped it in this step (the step took it below ``floor_z``): its
+    velocity's size at the end of the step, before the floor took it away; -1.0 when the
+    centre stayed at or above the floor."""
     target = work[_TARGETS, 0:4]
     rotor_speed_commands(commands, v, target)
     stage = work[_STAGE_STATE]
@@ -156,9 +159,12 @@ def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.nd
     norm = math.sqrt(x[6] ** 2 + x[7] ** 2 + x[8] ** 2 + x[9] ** 2)
     for i in range(6, 10):
         x[i] /= norm
-    if x[2] < floor_z:
-        x[2] = floor_z
-        x[3] = 0.0
-        x[4] = 0.0
-        x[5] = max(x[5], 0.0)
-        x[10:13] = 0.0
+    if not x[2] < floor_z:
+        return -1.0
+    speed = math.sqrt(x[3] ** 2 + x[4] ** 2 + x[5] ** 2)
+    x[2] = floor_z
+    x[3] = 0.0
+    x[4] = 0.0
+    x[5] = max(x[5], 0.0)
+    x[10:13] = 0.0
+    return speed

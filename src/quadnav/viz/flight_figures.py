@@ -54,10 +54,14 @@ MIN_ANGLE_SPAN = 2.0
 
 
 def run_outcome(metrics: dict) -> str:
-    """``success``, or why the run failed (from metrics.json): no path, the flight's ending
-    and when, or the goal (a track: the reference's end) missed."""
+    """``success`` (saying so when the flight kept less margin than asked), or why the run
+    failed (from metrics.json): no path, the flight's ending and when, or the goal (a
+    track: the reference's end) missed."""
     if not metrics.get("path_found", True):
         return "no path"
+    if metrics["success"] and metrics.get("margin_shortfall_m"):
+        return (f"success, but kept only {metrics['flight_margin_m']:.3f} m of the "
+                f"{metrics['margin_m']:g} m margin")
     if metrics["success"]:
         return "success"
     if metrics["ending"] == Ending.COMPLETED.value:
