@@ -100,6 +100,12 @@ class MissionSettings:
         """The vehicle that really flies: ``plant``, else ``vehicle``."""
         return self.plant or self.vehicle
 
+    @property
+    def body(self) -> FloatArray:
+        """(3,) half extents of the flown vehicle's body along x, y, z, m, as missions fly
+        it (at yaw 0): what :func:`~quadnav.planning.make_problem` keeps inside the map."""
+        return self.flown_vehicle.half_extents()
+
 
 @dataclass(frozen=True, eq=False)
 class Mission:
@@ -136,7 +142,7 @@ class Mission:
         plant = {} if self.settings.plant is None else {"plant": as_plain(self.settings.plant)}
         return {
             "map": problem.world.name, "start": problem.start.tolist(),
-            "goal": problem.goal.tolist(), "margin_m": problem.margin,
+            "goal": problem.goal_asked.tolist(), "margin_m": problem.margin,
             "planner": self.settings.planner, "refine": self.settings.refine,
             "planning": as_plain(self.settings.planning),
             "trajectory": as_plain(self.settings.trajectory),
@@ -154,6 +160,7 @@ class Mission:
             "map": problem.world.name,
             "start": problem.start.tolist(),
             "goal": problem.goal.tolist(),
+            "goal_asked": problem.goal_asked.tolist(),
             "margin_m": problem.margin,
             "start_leg_m": path_length(problem.start_leg),
             "goal_leg_m": path_length(problem.goal_leg),
@@ -259,8 +266,9 @@ def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | 
     """
     if margin is None:
         margin = world.margin if world.margin is not None else 0.2
-    return fly_problem(make_problem(world, start, goal, margin), settings, planning_progress,
-                       flight_progress)
+    settings = settings or MissionSettings()
+    return fly_problem(make_problem(world, start, goal, margin, settings.body), settings,
+                       planning_progress, flight_progress)
 
 
 def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = None,

@@ -75,7 +75,7 @@ def fly(args: argparse.Namespace) -> int:
     settings = mission_settings(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)
-    problem = make_problem(world, start, goal, resolve_margin(args, world))
+    problem = make_problem(world, start, goal, resolve_margin(args, world), settings.body)
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
