@@ -68,7 +68,8 @@ def test_a_goal_on_the_boundary_is_flown_to_the_nearest_point_where_the_body_fit
     metrics, flight = _flown(tmp_path / "run")
     assert metrics["goal_asked"] == [4.0, 2.0, 1.0]
     assert metrics["goal"] == pytest.approx([4.0 - HALF[0] - BODY_ROOM, 2.0, 1.0], abs=1e-12)
-    assert metrics["success"]
+    assert metrics["success"] and metrics["body_outside_m"] == 0.0
+    assert metrics["body_outside_time_s"] == 0.0 and metrics["body_outside_since_s"] is None
     # The tolerance is judged at the point flown to, and the body never touched the wall.
     assert np.linalg.norm(flight[-1, 1:4] - metrics["goal"]) == pytest.approx(
         metrics["final_error_m"], abs=1e-6)
@@ -88,7 +89,7 @@ def test_the_rbe595_tello_start_and_goal_on_the_floor_take_off_and_land_inside(
     assert metrics["goal_asked"] == [-0.59, 6.81, 0.0]
     assert metrics["goal"] == pytest.approx([-0.59, 6.81, HALF[2] + BODY_ROOM], abs=1e-12)
     assert metrics["start_leg_m"] == pytest.approx(0.21)  # straight up off the floor
-    assert metrics["success"]
+    assert metrics["success"] and metrics["body_outside_m"] == 0.0
     outside = _body_outside(flight, load_world(folder / "p2b_map1.txt").boundary)
     assert outside[0] == pytest.approx(HALF[2])  # it stands half in the floor at the start
     assert _after_leaving_the_start(outside).max() <= 0.0  # then never leaves the map again
@@ -129,3 +130,47 @@ def test_a_start_whose_body_cannot_fit_beside_a_block_is_refused_in_one_line(tmp
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         assert make_problem(pocket, [0, 1.5, 0.5], [3, 1.5, 1], 0.2).start_leg[1, 0] < 1e-3
+
+
+def test_a_flight_blown_out_of_the_map_is_not_a_success(tmp_path):
+    # A steady 0.1 N wind towards the x = 4 wall pushes the body 4-5 cm through it; the
+    # centre stays inside and ends 5 cm from the goal, so only the body says it failed.
+    result = run_here("fly", "empty:size=4x4x3", "--start", "1", "2", "1", "--goal", "3.9", "2",
+                      "1", "--wind", "0.1", "0", "0", "--quiet", "--no-figures",
+                      "-o", tmp_path / "run")
+    assert result.returncode == 1
+    assert "quadnav: flight failed: the body left the map by 4." in result.stderr
+    metrics, flight = _flown(tmp_path / "run")
+    assert not metrics["success"]
+    assert metrics["ending"] == "completed" and metrics["reached_goal"]
+    assert metrics["final_error_m"] < 0.08 and metrics["goal"] == metrics["goal_asked"]
+    assert 0.03 < metrics["body_outside_m"] < 0.06 and metrics["body_outside_time_s"] > 1.0
+    outside = _body_outside(flight, np.array([0, 0, 0, 4, 4, 3]))
+    assert outside.max() == pytest.approx(metrics["body_outside_m"], abs=2e-3)
+    assert flight[:, 1].max() < 4.0  # the centre never left: the old check saw nothing
+
+
+def test_the_body_is_measured_at_its_attitude_and_after_its_start_move_only():
+    from quadnav.sim.excursion import body_excursion
+
+    boundary = np.array([0.0, 0, 0, 4, 4, 3])
+    level, rolled = [1.0, 0, 0, 0], Rotation.from_euler("x", 45, degrees=True).as_quat()
+    rolled = np.roll(rolled, 1)  # scalar first
+    t = np.array([0.0, 0.01, 0.02])
+    # 5 cm above the floor: the level body (2.5 cm half height) fits, rolled 45 deg it
+    # reaches (0.05 + 0.025) / sqrt(2) = 5.3 cm down, 3 mm through the floor.
+    low = np.array([[2.0, 2.0, 0.05]] * 3)
+    assert not body_excursion(t, low, np.array([level] * 3), HALF, boundary)
+    tilted = body_excursion(t, low, np.array([level, rolled, level]), HALF, boundary)
+    assert tilted.depth == pytest.approx(0.075 / np.sqrt(2) - 0.05, abs=1e-9)
+    assert tilted.duration == pytest.approx(0.02) and tilted.since == 0.0
+    # From the x = 0 wall: moving straight in is the start, not counted; moving along the
+    # wall with the body still half out is counted once past the start move's 8 cm.
+    t = np.linspace(0.0, 1.0, 11)
+    inward = np.column_stack([np.linspace(0, 0.2, 11), np.full(11, 2.0), np.full(11, 1.0)])
+    along = np.column_stack([np.zeros(11), np.linspace(2.0, 3.0, 11), np.full(11, 1.0)])
+    attitudes = np.array([level] * 11)
+    assert not body_excursion(t, inward, attitudes, HALF, boundary)
+    sideways = body_excursion(t, along, attitudes, HALF, boundary)
+    assert sideways.depth == pytest.approx(HALF[0]) and sideways.since == pytest.approx(0.1)
+    assert sideways.duration == pytest.approx(0.9)

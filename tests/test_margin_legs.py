@@ -6,7 +6,8 @@ boundary each with a wall 0.2 m in front of it (a pocket no wider than the margi
 room for the vehicle's 0.1 m body), and a lab-maze file whose thin walls give their
 extents the wrong way round.
 Each is flown at 1, 2 and 3 m/s over 5 seeds: the trajectory keeps at least 95 % of the
-margin off the legs, measured exactly, and every flight reaches the goal with no contact.
+margin off the legs, measured exactly, and every flight reaches the goal with no contact
+and its body inside the map.
 """
 
 from __future__ import annotations
@@ -83,6 +84,7 @@ def test_flights_keep_the_margin_off_the_legs_at_every_speed_and_seed(world, req
         mission = _fly(world, speed, seed)
         m = mission.metrics()
         assert m["success"] and not m["collision"], (speed, seed, m)
+        assert m["body_outside_m"] == 0.0
         assert m["trajectory_margin_m"] >= 0.95 * MARGIN, (speed, seed, m)
         assert m["trajectory_leg_margin_m"] >= 0.0  # the legs touch nothing
         assert m["flight_margin_m"] >= 0.75 * MARGIN, (speed, seed, m)

@@ -200,8 +200,10 @@ def measure_flight(world: World, trajectory: Trajectory, flight: Flight,
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
-    """Whether the flight ran to the end without contact and ended near the goal."""
-    return flight.ending is Ending.COMPLETED and flight.final_error <= goal_tolerance
+    """Whether the flight ran to the end without contact, its body never left the map
+    after the start, and it ended near the goal."""
+    return (flight.ending is Ending.COMPLETED and not flight.body_outside
+            and flight.final_error <= goal_tolerance)
 
 
 def min_clearance(flight: Flight, world: World) -> float | None:
@@ -231,6 +233,9 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "ending": flight.ending.value,
         "contact_time_s": flight.contact_time,
         "contact_block": flight.contact_block,
+        "body_outside_m": flight.body_outside.depth,
+        "body_outside_time_s": flight.body_outside.duration,
+        "body_outside_since_s": flight.body_outside.since,
         "final_error_m": flight.final_error,
         "goal_tolerance_m": settings.goal_tolerance,
         "flight_time_s": flight.duration,

@@ -59,6 +59,7 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("trajectory_margin_m", FLOAT), ("trajectory_leg_margin_m", FLOAT),
     ("flight_margin_m", FLOAT), ("flight_leg_margin_m", FLOAT), ("collision", BOOL),
     ("reached_goal", BOOL), ("ending", STR), ("contact_time_s", FLOAT), ("contact_block", INT),
+    ("body_outside_m", FLOAT), ("body_outside_time_s", FLOAT), ("body_outside_since_s", FLOAT),
     ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
     ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
     ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),

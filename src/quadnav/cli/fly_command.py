@@ -102,13 +102,17 @@ def failure_reason(mission: Mission) -> str:
 
 
 def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
-    """One line saying why a flight failed: a collision, leaving the map, diverging, or
-    ending more than ``goal_tolerance`` m from ``goal``."""
+    """One line saying why a flight failed: a collision, leaving the map, diverging, the
+    body leaving the map, or ending more than ``goal_tolerance`` m from ``goal``."""
     if flight.contact_block is not None:
         return (f"collided with block {flight.contact_block} at t = "
                 f"{flight.contact_time:.2f} s")
     if flight.contact_time is not None:
         return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
+    if flight.body_outside:
+        outside = flight.body_outside
+        return (f"the body left the map by {100 * outside.depth:.1f} cm for "
+                f"{outside.duration:.2f} s from t = {outside.since:.2f} s")
     return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
             f"{100 * goal_tolerance:.0f} cm)")
 

@@ -236,9 +236,8 @@ def _warn_goal_moved(asked: FloatArray, flown: FloatArray, body: FloatArray) -> 
     at goal ``asked`` (3,) and the flight ends at ``flown`` (3,) instead."""
     warnings.warn(
         f"goal {format_point(asked)} is too close to the boundary for the vehicle's "
-        f"{_size(body)} m "
-        f"body; flying to {format_point(flown)} instead, the nearest point where it fits "
-        f"with {100 * BODY_ROOM:g} cm to spare", PlanningWarning, stacklevel=3)
+        f"{_size(body)} m body; flying to {format_point(flown)} instead, the nearest point "
+        f"where it fits with {100 * BODY_ROOM:g} cm to spare", PlanningWarning, stacklevel=3)
 
 
 def _warn_leg(label: str, leg: FloatArray, margin: float, free: bool) -> None:

@@ -8,6 +8,7 @@ from enum import Enum
 import numpy as np
 
 from quadnav.arrays import FloatArray
+from quadnav.sim.excursion import Excursion
 
 
 class Ending(Enum):
@@ -44,6 +45,8 @@ class Flight:
             times the speed of each rotor, ``k_m w^3``, summed over the four and integrated
             over the recorded samples (trapezoids); a measure to compare flights by, not a
             battery's drain (motor and electronics losses are left out).
+        body_outside: how far and how long the body box left the map's boundary after
+            the start (:func:`~quadnav.sim.excursion.body_excursion`; none in open space).
         info: the settings and vehicle used, JSON-ready.
     """
 
@@ -61,6 +64,7 @@ class Flight:
     mixer_saturation: float
     wall_time: float
     rotor_energy: float
+    body_outside: Excursion = field(default_factory=Excursion)
     info: dict = field(default_factory=dict)
 
     @property
