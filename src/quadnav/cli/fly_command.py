@@ -150,8 +150,9 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
                     f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
-                    "reaches the goal without touching a block; 1 on a collision, a missed "
-                    "goal or no path (metrics.json is still written); 2 on bad input.")
+                    "reaches the goal without touching a block, its body inside the map; 1 "
+                    "on a collision, the body leaving the map, a missed goal or no path "
+                    "(metrics.json is still written); 2 on bad input.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)
