@@ -16,7 +16,7 @@ from quadnav.batch.fly_one import fly_row, load_context
 from quadnav.batch.grid import MissionSpec, Spread, parse_spec, read_spec
 from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import wilson_interval
-from quadnav.batch.table import NAMES, WALL_TIME_COLUMNS, read_rows, same_row
+from quadnav.batch.table import NAMES, POINTS, WALL_TIME_COLUMNS, read_rows, same_row
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
 from quadnav.sim.settings import SimSettings
@@ -151,9 +151,11 @@ def test_a_batch_gives_the_rows_rates_tables_and_page_of_its_missions_flown_one_
     for row, mission in zip(rows, alone, strict=True):
         metrics = mission.metrics()
         for key, value in metrics.items():
-            if key in ("map", "start", "goal") or key in WALL_TIME_COLUMNS:
+            if key == "map" or key in POINTS or key in WALL_TIME_COLUMNS:
                 continue
             assert row[key] == value, (key, row, metrics)
+        for name in POINTS:
+            assert [row[f"{name}_{a}"] for a in "xyz"] == metrics[name]
         assert row["error"] is None and row["search_stopped_by"] in ("improvement", "direct")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["n"] == MISSIONS and summary["complete"]
@@ -218,10 +220,10 @@ def test_refly_flies_a_row_again_with_figures_and_the_same_metrics(batch, tmp_pa
     assert (tmp_path / "again" / "flight_3d.png").is_file()
     assert (tmp_path / "again" / "report.html").is_file()
     metrics = json.loads((tmp_path / "again" / "metrics.json").read_text())
-    assert [metrics["start"], metrics["goal"]] == [
-        [row[f"{end}_{a}"] for a in "xyz"] for end in ("start", "goal")]
+    assert [metrics[name] for name in POINTS] == [
+        [row[f"{name}_{a}"] for a in "xyz"] for name in POINTS]
     for key, value in metrics.items():
-        if key not in ("start", "goal") and key not in WALL_TIME_COLUMNS:
+        if key not in POINTS and key not in WALL_TIME_COLUMNS:
             assert row[key] == value, key
     by_key = run_here("refly", out, row["mission_key"], "-o", tmp_path / "by-key",
                       "--no-figures")

@@ -2,10 +2,12 @@
 
 Maps of our own making in the shapes that broke real course runs: 1 m corridors between
 long walls and the boundary with start and goal on the boundary, a start and goal on the
-boundary each with a wall 0.1 m in front of it (a pocket narrower than the margin), and a
-lab-maze file whose thin walls give their extents the wrong way round.
+boundary each with a wall 0.2 m in front of it (a pocket no wider than the margin, with
+room for the vehicle's 0.1 m body), and a lab-maze file whose thin walls give their
+extents the wrong way round.
 Each is flown at 1, 2 and 3 m/s over 5 seeds: the trajectory keeps at least 95 % of the
-margin off the legs, measured exactly, and every flight reaches the goal with no contact.
+margin off the legs, measured exactly, and every flight reaches the goal with no contact
+and its body inside the map.
 """
 
 from __future__ import annotations
@@ -31,10 +33,10 @@ MARGIN = 0.2
 #: alternate ends; start and goal on the boundary x = 0.
 CORRIDORS = World(boundary=[0, 0, 0, 10, 5, 2], blocks=[[0, 1, 0, 8, 2, 2], [2, 3, 0, 10, 4, 2]],
                   start=[0, 0.5, 1], goal=[0, 4.5, 1], name="corridors")
-#: Start and goal on the boundary, each 0.1 m behind a full-height wall: narrower than the
+#: Start and goal on the boundary, each 0.2 m behind a full-height wall: no wider than the
 #: margin, so the only way out runs sideways along the boundary first.
 POCKETS = World(boundary=[0, 0, 0, 8, 6, 3],
-                blocks=[[0.1, 2, 0, 1.5, 4, 3], [6.5, 2, 0, 7.9, 4, 3]],
+                blocks=[[0.2, 2, 0, 1.5, 4, 3], [6.5, 2, 0, 7.8, 4, 3]],
                 start=[0, 3, 1.5], goal=[8, 3, 1.5], name="pockets")
 #: A maze-like lab map as MEAM620's current files write it: thin walls whose extents give
 #: min and max the wrong way round on an axis (read as the box between, with a warning).
@@ -82,6 +84,7 @@ def test_flights_keep_the_margin_off_the_legs_at_every_speed_and_seed(world, req
         mission = _fly(world, speed, seed)
         m = mission.metrics()
         assert m["success"] and not m["collision"], (speed, seed, m)
+        assert m["body_outside_m"] == 0.0
         assert m["trajectory_margin_m"] >= 0.95 * MARGIN, (speed, seed, m)
         assert m["trajectory_leg_margin_m"] >= 0.0  # the legs touch nothing
         assert m["flight_margin_m"] >= 0.75 * MARGIN, (speed, seed, m)
@@ -97,11 +100,11 @@ def test_a_leg_out_of_a_pocket_runs_along_the_boundary_and_keeps_its_start_clear
     assert len(leg) == 3 and np.array_equal(leg[0], POCKETS.start)
     assert free.is_free(leg[-1]) and point_margins(POCKETS, leg[-1:])[0] > MARGIN
     assert not free.points_free(leg[:-1]).any()  # only the last point keeps the margin
-    # Never closer to the wall than the start (0.1 m), never outside the boundary.
-    assert polyline_margin(POCKETS, leg, boundary=False) >= 0.1 * (1 - 1e-3)
+    # Never closer to the wall than the start (0.2 m), never outside the boundary.
+    assert polyline_margin(POCKETS, leg, boundary=False) >= 0.2 * (1 - 1e-3)
     assert np.all(leg >= POCKETS.lower) and np.all(leg <= POCKETS.upper)
     # The shortest way: along the boundary to just past the wall's margin, then out.
-    assert np.linalg.norm(np.diff(leg, axis=0), axis=1).sum() < 1.35
+    assert np.linalg.norm(np.diff(leg, axis=0), axis=1).sum() < 1.45
     assert np.allclose(leg[:, 2], 1.5)
 
 

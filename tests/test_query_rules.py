@@ -32,8 +32,9 @@ from quadnav.trajectory.space import SafeSpace
 from quadnav.vehicle.params import load_params
 from quadnav.world import World, load_world
 
-#: A room 4 m long with a wall 0.1 m in front of its x = 0 face.
-ROOM = World(boundary=[0, 0, 0, 4, 3, 2], blocks=[[0.1, 1, 0, 0.6, 2, 2]], name="room")
+#: A room 4 m long with a wall 0.2 m in front of its x = 0 face: a pocket no wider than
+#: the margin, with room for the vehicle's 0.1 m body.
+ROOM = World(boundary=[0, 0, 0, 4, 3, 2], blocks=[[0.2, 1, 0, 0.6, 2, 2]], name="room")
 GOAL = (3.5, 1.5, 1.0)
 QUERIES = {
     "free": ((2.0, 1.5, 1.0), None),

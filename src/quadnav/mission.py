@@ -110,6 +110,12 @@ class MissionSettings:
         """The vehicle that really flies: ``plant``, else ``vehicle``."""
         return self.plant or self.vehicle
 
+    @property
+    def body(self) -> FloatArray:
+        """(3,) half extents of the flown vehicle's body along x, y, z, m, as missions fly
+        it (at yaw 0): what :func:`~quadnav.planning.make_problem` keeps inside the map."""
+        return self.flown_vehicle.half_extents()
+
 
 @dataclass(frozen=True, eq=False)
 class Mission:
@@ -147,7 +153,7 @@ class Mission:
         plant = {} if self.settings.plant is None else {"plant": as_plain(self.settings.plant)}
         return {
             "map": problem.world.name, "start": problem.start.tolist(),
-            "goal": problem.goal.tolist(), "margin_m": problem.margin,
+            "goal": problem.goal_asked.tolist(), "margin_m": problem.margin,
             "planner": self.settings.planner, "refine": self.settings.refine,
             "planning": as_plain(self.settings.planning),
             "trajectory": as_plain(self.settings.trajectory),
@@ -165,6 +171,7 @@ class Mission:
             "map": problem.world.name,
             "start": problem.start.tolist(),
             "goal": problem.goal.tolist(),
+            "goal_asked": problem.goal_asked.tolist(),
             "margin_m": problem.margin,
             "start_leg_m": path_length(problem.start_leg),
             "goal_leg_m": path_length(problem.goal_leg),
@@ -227,8 +234,10 @@ def least_margin_time(t: FloatArray, stretches: FloatArray, window: tuple[float,
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
-    """Whether the flight ran to the end without contact and ended near the goal."""
-    return flight.ending is Ending.COMPLETED and flight.final_error <= goal_tolerance
+    """Whether the flight ran to the end without contact, its body never left the map
+    after the start, and it ended near the goal."""
+    return (flight.ending is Ending.COMPLETED and not flight.body_outside
+            and flight.final_error <= goal_tolerance)
 
 
 def min_clearance(flight: Flight, world: World) -> float | None:
@@ -249,6 +258,9 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "contact_time_s": flight.contact_time,
         "contact_block": flight.contact_block,
         "floor_touch_speed_m_s": flight.floor_speed,
+        "body_outside_m": flight.body_outside.depth,
+        "body_outside_time_s": flight.body_outside.duration,
+        "body_outside_since_s": flight.body_outside.since,
         "final_error_m": flight.final_error,
         "goal_tolerance_m": settings.goal_tolerance,
         "flight_time_s": flight.duration,
@@ -285,8 +297,9 @@ def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | 
     """
     if margin is None:
         margin = world.margin if world.margin is not None else 0.2
-    return fly_problem(make_problem(world, start, goal, margin), settings, planning_progress,
-                       flight_progress)
+    settings = settings or MissionSettings()
+    return fly_problem(make_problem(world, start, goal, margin, settings.body), settings,
+                       planning_progress, flight_progress)
 
 
 def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = None,

@@ -145,10 +145,12 @@ def given_query(context: BatchContext, mission: MissionSpec
     return start, goal
 
 
-def mission_problem(context: BatchContext, mission: MissionSpec) -> PlanningProblem:
-    """The mission's checked query. A start or goal that is not given is drawn from the
-    seed: of :data:`DRAWN_POINTS` free points of the inflated map, the most distant pair
-    (or the point most distant from the given end) that :func:`make_problem` accepts.
+def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarray
+                    ) -> PlanningProblem:
+    """The mission's checked query for a vehicle whose body has half extents ``body``
+    (3,) m. A start or goal that is not given is drawn from the seed: of
+    :data:`DRAWN_POINTS` free points of the inflated map, the most distant pair (or the
+    point most distant from the given end) that :func:`make_problem` accepts.
 
     Raises:
         QuadnavError: a bad query (a given point in a block, disconnected ends).
@@ -157,7 +159,7 @@ def mission_problem(context: BatchContext, mission: MissionSpec) -> PlanningProb
     margin = mission_margin(context, mission)
     start, goal = given_query(context, mission)
     if start is not None and goal is not None:
-        return make_problem(world, start, goal, margin)
+        return make_problem(world, start, goal, margin, body)
     rng = np.random.default_rng([mission.seed, QUERY_STREAM])
     points = world.inflate(margin).sample_free(DRAWN_POINTS, rng)
     starts = points if start is None else start[None]
@@ -168,7 +170,7 @@ def mission_problem(context: BatchContext, mission: MissionSpec) -> PlanningProb
     for flat in order[:DRAWN_TRIES]:
         i, j = np.unravel_index(flat, distances.shape)
         try:
-            return make_problem(world, starts[i], goals[j], margin)
+            return make_problem(world, starts[i], goals[j], margin, body)
         except QuadnavError as refused:
             error = refused
     raise QuadnavError(f"no start and goal drawn from seed {mission.seed} could be joined: "
@@ -184,7 +186,7 @@ def fly_mission_spec(context: BatchContext, mission: MissionSpec) -> Mission:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         settings = mission_settings(context, mission)
-        return fly_problem(mission_problem(context, mission), settings)
+        return fly_problem(mission_problem(context, mission, settings.body), settings)
 
 
 def fly_row(context: BatchContext, mission: MissionSpec) -> dict:
@@ -209,4 +211,4 @@ def warm_up(context: BatchContext) -> None:
                                trajectory=TrajectorySettings(v_max=1.0))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
-        fly_problem(make_problem(world, None, None, DEFAULT_MARGIN), settings)
+        fly_problem(make_problem(world, None, None, DEFAULT_MARGIN, settings.body), settings)

@@ -3,7 +3,8 @@ keeps every finished row, and the Parquet and CSV files.
 
 One row per mission: its key, its grid values, the factors of its flown vehicle, where
 its start and goal came from, every key of :meth:`~quadnav.mission.Mission.metrics`
-(``start`` and ``goal`` as ``start_x`` ... ``goal_z``), what ended the search, and
+(the points ``start``, ``goal`` and ``goal_asked`` as ``start_x`` ... ``goal_asked_z``),
+what ended the search, and
 ``error``: why a mission was refused (None when it flew or found no path). The schema
 (:data:`COLUMNS`) is explicit, so the Parquet and CSV files have the same columns and types
 whatever rows failed.
@@ -36,6 +37,8 @@ if TYPE_CHECKING:
 
 STR, FLOAT, INT, BOOL = "string", "float64", "int64", "bool"
 AXES = ("x", "y", "z")
+#: The points of ``metrics.json``, each three columns ``NAME_x`` ... ``NAME_z``.
+POINTS = ("start", "goal", "goal_asked")
 
 #: The grid values of a mission and its flown vehicle's factors.
 GRID_COLUMNS: tuple[tuple[str, str], ...] = (
@@ -48,7 +51,8 @@ GRID_COLUMNS: tuple[tuple[str, str], ...] = (
 #: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
 METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("success", BOOL), *((f"start_{a}", FLOAT) for a in AXES),
-    *((f"goal_{a}", FLOAT) for a in AXES), ("margin_m", FLOAT), ("start_leg_m", FLOAT),
+    *((f"goal_{a}", FLOAT) for a in AXES), *((f"goal_asked_{a}", FLOAT) for a in AXES),
+    ("margin_m", FLOAT), ("start_leg_m", FLOAT),
     ("goal_leg_m", FLOAT), ("vehicle", STR), ("speed_m_s", FLOAT), ("path_found", BOOL),
     ("path_length_m", FLOAT), ("path_vertices", INT), ("planning_time_s", FLOAT),
     ("trajectory_time_s", FLOAT), ("trajectory_duration_s", FLOAT),
@@ -57,6 +61,7 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("flight_margin_time_s", FLOAT), ("collision", BOOL),
     ("reached_goal", BOOL), ("ending", STR), ("contact_time_s", FLOAT), ("contact_block", INT),
     ("floor_touch_speed_m_s", FLOAT),
+    ("body_outside_m", FLOAT), ("body_outside_time_s", FLOAT), ("body_outside_since_s", FLOAT),
     ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
     ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
     ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),
@@ -99,12 +104,13 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
         row |= _point_columns("start", start) | _point_columns("goal", goal)
         return row
     metrics = flown.metrics()
-    unknown = set(metrics) - set(NAMES) - {"start", "goal"}
+    unknown = set(metrics) - set(NAMES) - set(POINTS)
     if unknown:
         raise RuntimeError(f"metrics missing from the batch table schema: {sorted(unknown)}")
     row |= {key: value for key, value in metrics.items()
-            if key not in ("start", "goal", "map", "seed", "planner")}
-    row |= _point_columns("start", metrics["start"]) | _point_columns("goal", metrics["goal"])
+            if key not in (*POINTS, "map", "seed", "planner")}
+    for name in POINTS:
+        row |= _point_columns(name, metrics[name])
     row["search_stopped_by"] = flown.plan.stats.stopped_by
     return row
 

@@ -82,7 +82,7 @@ def fly(args: argparse.Namespace) -> int:
     settings = mission_settings(args)
     world = load_world(args.map)
     start, goal = resolve_start_goal(args, world)
-    problem = make_problem(world, start, goal, resolve_margin(args, world))
+    problem = make_problem(world, start, goal, resolve_margin(args, world), settings.body)
     with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
@@ -116,7 +116,8 @@ def failure_reason(mission: Mission) -> str:
 
 def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
     """One line saying why a flight failed: a collision, hitting the floor, leaving the map,
-    diverging, or ending more than ``goal_tolerance`` m from ``goal``."""
+    diverging, the body leaving the map, or ending more than ``goal_tolerance`` m from
+    ``goal``."""
     if flight.contact_block is not None:
         return (f"collided with block {flight.contact_block} at t = "
                 f"{flight.contact_time:.2f} s")
@@ -124,6 +125,10 @@ def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal"
         return f"hit the floor at {flight.floor_speed:.2f} m/s at t = {flight.contact_time:.2f} s"
     if flight.contact_time is not None:
         return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
+    if flight.body_outside:
+        outside = flight.body_outside
+        return (f"the body left the map by {100 * outside.depth:.1f} cm for "
+                f"{outside.duration:.2f} s from t = {outside.since:.2f} s")
     return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
             f"{100 * goal_tolerance:.0f} cm)")
 
@@ -163,9 +168,10 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
                     f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
-                    "reaches the goal without touching a block; 1 on a collision, a missed "
-                    "goal or no path (metrics.json is still written), and with --strict "
-                    "when the flight kept less margin than asked; 2 on bad input.")
+                    "reaches the goal without touching a block, its body inside the map; 1 "
+                    "on a collision, the body leaving the map, a missed goal or no path "
+                    "(metrics.json is still written), and with --strict when the flight kept "
+                    "less margin than asked; 2 on bad input.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)

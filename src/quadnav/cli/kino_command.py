@@ -332,7 +332,8 @@ def quadrotor(args: argparse.Namespace) -> int:
     model = SampledQuadrotor()
     result = search(f"quadrotor ({sampling(settings)})", args.quiet,
                     lambda progress: plan_quadrotor(world, start, goal, settings, model,
-                                                    margin, progress))
+                                                    margin, progress,
+                                                    vehicle.half_extents(model.yaw)))
     query = {"start": start.tolist(), "goal": goal.tolist(), "margin": margin}
     data = summary("quadrotor", world.name, result, settings, model, query)
     data["replay"] = {"max_position_error": replay_error(model, result),

@@ -104,7 +104,8 @@ def _key(state: FloatArray) -> FloatArray:
 
 def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: KinoSettings,
                    model: SampledQuadrotor | None = None, margin: float = 0.2,
-                   progress: Progress | None = None) -> KinoResult:
+                   progress: Progress | None = None, body: ArrayLike = (0.0, 0.0, 0.0)
+                   ) -> KinoResult:
     """Plan a flight from ``start`` (at rest) into the ball of ``settings.goal_radius``
     around ``goal`` and on to rest exactly at ``goal`` by kinodynamic RRT (see the module
     docstring).
@@ -124,6 +125,10 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
         model: the vehicle; default :class:`SampledQuadrotor()`.
         margin: safety margin, m, >= 0, kept from every block and the boundary.
         progress: called every :data:`PROGRESS_EVERY` iterations and at the end.
+        body: half extents (3,) of the vehicle's body box along x, y, z, m (default: a
+            point): a start where it does not fit in the boundary is left by the shortest
+            move that brings it in, a goal there is moved to the nearest point where it
+            fits (:func:`~quadnav.planning.make_problem`).
 
     Returns:
         A :class:`KinoResult` named ``"quadrotor"``: states (K, 6) position m and velocity
@@ -140,7 +145,7 @@ def plan_quadrotor(world: World, start: ArrayLike, goal: ArrayLike, settings: Ki
     model = model or SampledQuadrotor()
     if not (math.isfinite(margin) and margin >= 0):
         raise QuadnavError(f"margin must be >= 0 m, got {margin}")
-    problem = make_problem(world, start, goal, margin + CHORD_TOLERANCE)
+    problem = make_problem(world, start, goal, margin + CHORD_TOLERANCE, body)
     free, goal_point = problem.free_world, problem.search_goal
     free.segments_free(np.zeros((0, 2, 3)))  # load the kernels and the block grid
     clock = time.perf_counter()

@@ -17,9 +17,11 @@ point to the nearest free point of the inflated world found as follows:
 
 The *leg world* is the real map with every block grown by the leg clearance — the point's
 own distance to the blocks (per axis), or the margin if that is less, minus a sliver —
-and the boundary itself allowed: a leg never comes closer to a block than the point it
-starts from (a vehicle that fits there fits all along its leg), while it may run along
-the boundary the point lies on.
+and the boundary shrunk by the body's *reach* (:func:`body_reach`: its half extents plus
+:data:`BODY_ROOM`; nothing for a point): a leg never comes closer to a block than the
+point it starts from (a vehicle that fits there fits all along its leg), and keeps the
+whole body inside the boundary. A start too close to the boundary for that is first moved
+inside by the shortest move (:func:`body_inside`), and the leg starts there.
 """
 
 from __future__ import annotations
@@ -28,13 +30,14 @@ import itertools
 
 import clarabel
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.result import path_length
-from quadnav.world.margins import point_margins
+from quadnav.world.margins import box_margins
 from quadnav.world.model import World
-from quadnav.world.placement import format_point
+from quadnav.world.placement import format_box, format_point
 
 #: How far past the margin a leg ends, as a fraction of the margin, where there is room:
 #: the trajectory that starts there at rest then has room to curve without entering it.
@@ -45,6 +48,10 @@ LEG_END_CLEARANCE = 1e-6
 LEG_CLEARANCE_SLIVER = 1e-3
 #: Widening of the boundary in the leg world, metres, so a point on it is free.
 BOUNDARY_SLACK = 1e-9
+#: How far, metres, legs, moved starts and moved goals keep the vehicle's body inside
+#: the boundary: room for the tracking error of a leg flown straight from rest to rest
+#: (the stop at its end overshoots by up to about 1.7 cm, at the speeds flown).
+BODY_ROOM = 0.03
 #: Rounds of face projection tried when leaving overlapping margins.
 _PROJECTION_ROUNDS = 3
 #: Half-size of the first box searched around a point, in margins; it doubles.
@@ -55,15 +62,44 @@ _SAME_LINE = 1e-7
 MAX_CELLS = 2_000_000
 
 
+def body_reach(body: ArrayLike) -> FloatArray:
+    """How far (3,), metres, per axis, legs keep the centre from the boundary for a body
+    of half extents ``body`` (3,) m: those plus :data:`BODY_ROOM`; zeros for a point (a
+    body of zeros)."""
+    half = np.asarray(body, dtype=np.float64).reshape(3)
+    return half + BODY_ROOM if np.any(half > 0) else np.zeros(3)
+
+
+def body_inside(world: World, point: FloatArray, reach: FloatArray, label: str
+                ) -> FloatArray:
+    """The point (3,) nearest ``point`` at least ``reach`` (3,) m inside the boundary of
+    ``world`` on every axis (``point`` itself when it is); QuadnavError when the map is
+    too narrow for that."""
+    lower, upper = world.lower + reach, world.upper - reach
+    if np.any(lower > upper):
+        raise QuadnavError(f"{label} {format_point(point)}: the vehicle's body (reaching "
+                           f"{format_point(reach)} m from its centre with room) does not fit "
+                           f"inside the boundary {format_box(world.boundary)}")
+    return np.clip(point, lower, upper)
+
+
 def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
-             label: str) -> FloatArray:
+             label: str, body: ArrayLike | None = None) -> FloatArray:
     """The leg (K, 3) from ``point`` out of the margin, ``point`` first and a free point
     of ``free_world`` (``world`` inflated by ``margin``) last; just ``point`` (1, 3) when
-    it is free already. QuadnavError when no way out is found."""
+    it is free already. QuadnavError when no way out is found.
+
+    ``body``: the half extents (3,), metres, of the vehicle's body box (default: a
+    point). The leg keeps it :data:`BODY_ROOM` inside the boundary (:func:`body_reach`;
+    ``point`` must lie that far in, see :func:`body_inside`) and never brings it closer to
+    a block than it is at ``point`` (:func:`own_clearance`), or than the margin less the
+    largest half extent if that is less."""
     if free_world.is_free(point):
         return point[None].copy()
-    legs = leg_world(world, min((1.0 - LEG_CLEARANCE_SLIVER) * margin,
-                                own_clearance(world, point)))
+    half = np.zeros(3) if body is None else np.asarray(body, dtype=np.float64).reshape(3)
+    clearance = max(0.0, min((1.0 - LEG_CLEARANCE_SLIVER) * (margin - half.max()),
+                             own_clearance(world, point, half)))
+    legs = leg_world(world, clearance, body_reach(half), half)
     for push in (LEG_END_DEPTH * margin, LEG_END_CLEARANCE):
         exits = [c for c in _projections(free_world, point, push)
                  if legs.segment_free(point, c)]
@@ -75,21 +111,29 @@ def find_leg(world: World, free_world: World, point: FloatArray, margin: float,
     return _end_at_margin(deeper if deeper.is_free(leg[-1]) else free_world, leg)
 
 
-def leg_world(world: World, clearance: float = 0.0) -> World:
-    """Where a leg may go: ``world`` with every block grown by ``clearance`` metres per
-    axis and the boundary widened by :data:`BOUNDARY_SLACK`, so a point on it is free."""
-    slack = np.repeat([-BOUNDARY_SLACK, BOUNDARY_SLACK], 3)
-    return world.replace(blocks=world.blocks + np.repeat([-clearance, clearance], 3),
-                         boundary=world.boundary + slack)
+def leg_world(world: World, clearance: float = 0.0, reach: ArrayLike | None = None,
+              body: ArrayLike | None = None) -> World:
+    """Where a leg may go: ``world`` with every block grown by the ``body`` half extents
+    (3,) m (default 0) plus ``clearance`` metres per axis, and the boundary shrunk by
+    ``reach`` (3,) m (default 0), then widened by :data:`BOUNDARY_SLACK`, so a point on
+    its faces is free."""
+    inward = np.zeros(3) if reach is None else np.asarray(reach, dtype=np.float64)
+    grow = clearance + (np.zeros(3) if body is None else np.asarray(body, dtype=np.float64))
+    shrink = np.concatenate([inward - BOUNDARY_SLACK, BOUNDARY_SLACK - inward])
+    return world.replace(blocks=world.blocks + np.concatenate([-grow, grow]),
+                         boundary=world.boundary + shrink)
 
 
-def own_clearance(world: World, point: FloatArray) -> float:
-    """How close, per axis, a leg from ``point`` (3,) may come to the blocks of
-    ``world``, metres: the point's own distance to them, less the sliver
-    (:data:`LEG_CLEARANCE_SLIVER`); ``inf`` without blocks."""
+def own_clearance(world: World, point: FloatArray, body: ArrayLike | None = None) -> float:
+    """How close, per axis, a leg from ``point`` (3,) may bring the body box of half
+    extents ``body`` (3,) m (default: a point) to the blocks of ``world``, metres: the
+    box's own margin from them there (:func:`~quadnav.world.margins.box_margins`), less
+    the sliver (:data:`LEG_CLEARANCE_SLIVER`); ``inf`` without blocks."""
     if not len(world.blocks):
         return float("inf")
-    return (1.0 - LEG_CLEARANCE_SLIVER) * float(point_margins(world, point, boundary=False)[0])
+    half = np.zeros(3) if body is None else np.asarray(body, dtype=np.float64)
+    box = np.concatenate([point - half, point + half])
+    return (1.0 - LEG_CLEARANCE_SLIVER) * float(box_margins(world, box, boundary=False)[0])
 
 
 def _projections(free_world: World, point: FloatArray, push: float) -> list[FloatArray]:

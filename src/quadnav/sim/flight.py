@@ -8,6 +8,7 @@ from enum import Enum
 import numpy as np
 
 from quadnav.arrays import FloatArray
+from quadnav.sim.excursion import Excursion
 
 
 class Ending(Enum):
@@ -55,6 +56,8 @@ class Flight:
             checked at every physics step; None if it never met it): a landing or the rest
             before a take-off, or for :attr:`Ending.FLOOR` the crash
             (:func:`~quadnav.sim.loop.touchdown`).
+        body_outside: how far and how long the body box left the map's boundary after
+            the start (:func:`~quadnav.sim.excursion.body_excursion`; none in open space).
         info: the settings and vehicle used, JSON-ready.
     """
 
@@ -74,6 +77,7 @@ class Flight:
     load_time: float
     rotor_energy: float
     floor_speed: float | None = None
+    body_outside: Excursion = field(default_factory=Excursion)
     info: dict = field(default_factory=dict)
 
     @property

@@ -26,6 +26,7 @@ from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
 from quadnav.sim import loop
+from quadnav.sim.excursion import Excursion, body_excursion
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.reference import Reference
@@ -173,6 +174,8 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         rotor_energy=rotor_energy(t, states, params),
         floor_speed=(None if record.stats[loop.FLOOR_SPEED] < 0
                      else float(record.stats[loop.FLOOR_SPEED])),
+        body_outside=(Excursion() if world is None else body_excursion(
+            t, states[:, 0:3], states[:, 6:10], vehicle.half_size, world.boundary)),
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
 

@@ -156,7 +156,7 @@ def mission_item(context: BatchContext, mission: MissionSpec) -> TuneItem:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         settings = mission_settings(context, mission)
-        flown = fly_problem(mission_problem(context, mission), settings)
+        flown = fly_problem(mission_problem(context, mission, settings.body), settings)
     label = (f"{mission.map.map} {'max' if mission.speed is None else f'{mission.speed:g}'} "
              f"m/s{_disturbance(mission.wind, mission.gusts)}, seed {mission.seed}")
     if flown.trajectory is None:

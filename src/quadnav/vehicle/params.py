@@ -82,6 +82,13 @@ class VehicleParams:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""
         return dataclasses.replace(self, **changes)
 
+    def half_extents(self, yaw: float = 0.0) -> FloatArray:
+        """How far (3,), m, the level body box reaches from its centre along the world's
+        x, y and z axes when it heads ``yaw`` rad: ``body_size / 2`` at yaw 0."""
+        c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+        x, y, z = 0.5 * self.body_size
+        return np.array([c * x + s * y, s * x + c * y, z])
+
     @property
     def weight(self) -> float:
         """m g, N."""
