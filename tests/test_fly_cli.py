@@ -238,9 +238,11 @@ def test_a_take_off_and_a_landing_on_the_floor_where_the_plan_has_them_are_no_cr
     assert result.returncode == 0, result.stderr
     metrics = json.loads((tmp_path / "out/metrics.json").read_text())
     assert metrics["success"] and metrics["ending"] == "completed"
-    # it lands on the floor (SE(3) at 100 Hz a little early, where the plan descends the
-    # last centimetres into the goal) at a tenth of a metre per second or so
-    assert 0.0 < metrics["floor_touch_speed_m_s"] < 0.2
+    # the start and goal on the floor are flown from and to where the body fits, just above
+    # it (docs/maps.md): if the vehicle meets the floor at all, it is gently
+    touch = metrics["floor_touch_speed_m_s"]
+    assert touch is None or touch < 0.2
+    assert metrics["goal"][2] > 0.0 == metrics["goal_asked"][2]
 
 
 def test_a_gust_that_slams_the_vehicle_into_the_floor_is_a_crash(tmp_path, shared_maps):
