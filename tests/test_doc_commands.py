@@ -3,8 +3,10 @@
 The commands of each page are run in the page's order (a later one reads what an earlier
 one wrote) in a fresh folder, in-process through ``quadnav.cli.main.main``. A command
 shown with its output (``$ quadnav ...`` followed by lines) must give that output: an
-error or warning line word for word, any other line with the same words (its numbers may
-differ, as planning runs against the clock); one shown without output must succeed. Lines
+error or warning line word for word and number for number (each number to within a step
+of its last digit and a little more, as another CPU, BLAS build or numba target changes
+last digits), any other line with the same words (its numbers may differ, as planning
+runs against the clock); one shown without output must succeed. Lines
 with placeholders (MAP, DIR, FILE, [optional parts], A|B) are synopses and are only read
 by the real parser (a Ray cluster's ``HEAD:6379`` is a placeholder too). The Blender
 command is only read too: tests/test_blender.py runs it as written (with both renders) on a
@@ -34,7 +36,14 @@ SHARED_MAPS = ROOT.parent / "shared" / "maps"
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: A synopsis, not a command: upper-case placeholders, optional parts, alternatives.
 PLACEHOLDER = re.compile(r"(?<![/\w.])[A-Z][A-Z0-9_]*\b(?!=)|\[|\.\.\.|\|(?!\s*head)")
-NUMBER = re.compile(r"-?\d[\d,]*(?:\.\d+)?")
+#: A number, not a digit of a name (``rbe595``, ``map1``, ``10x10x10``: those are words).
+NUMBER = re.compile(r"(?<![A-Za-z_])-?\d[\d,]*(?:\.\d+)?")
+#: How far a number printed in an error or warning line may be from the documented one,
+#: beyond a step of the documented number's last digit (a value on the other side of a
+#: rounding boundary), relative to its size: another CPU, BLAS build or numba target
+#: changes the last digits of what is computed, and no documented example may hinge on
+#: them (pick examples with a clear margin).
+NUMBER_SLACK = 2e-3
 #: An error line of quadnav, or of one of its commands' parsers (``quadnav fly: error:``).
 ERROR_LINE = re.compile(r"quadnav[\w ]*: error: ")
 
@@ -118,6 +127,29 @@ def _masked(line: str) -> str:
     return NUMBER.sub("#", line.strip())
 
 
+def _value(number: str) -> float:
+    return float(number.replace(",", ""))
+
+
+def _tolerance(number: str) -> float:
+    """How far a value may be from the documented ``number`` (its text) and still read
+    as it: a step of its last digit plus :data:`NUMBER_SLACK` of it. A whole number is
+    read to 3 significant digits (quadnav writes measured values with ``%.3g``, so ``3``
+    may stand for 3.00; a count or an index of 1 or 2 digits stays exact)."""
+    whole, _, decimals = number.lstrip("-").replace(",", "").partition(".")
+    step = 10.0 ** (-len(decimals) if decimals else len(whole.lstrip("0") or "0") - 3)
+    return step + NUMBER_SLACK * abs(_value(number))
+
+
+def _says(documented: str, printed: str) -> bool:
+    """Whether the ``printed`` line says the ``documented`` one: the same words, and each
+    number within the :func:`_tolerance` of the documented one."""
+    if _masked(documented) != _masked(printed):
+        return False
+    numbers = zip(NUMBER.findall(documented), NUMBER.findall(printed), strict=True)
+    return all(abs(_value(got) - _value(shown)) <= _tolerance(shown) for shown, got in numbers)
+
+
 def _check_output(command: DocCommand, code: int, out: str, err: str) -> None:
     """The documented output against what the command printed."""
     documented = [line for line in command.output if line.strip() and line.strip() != "..."]
@@ -126,7 +158,8 @@ def _check_output(command: DocCommand, code: int, out: str, err: str) -> None:
     printed = out.splitlines() + err.splitlines()
     for line in documented:
         if ERROR_LINE.match(line) or line.startswith("quadnav: warning:"):
-            assert line in printed, f"{command.line}: documented\n  {line}\nprinted\n{err}"
+            assert any(_says(line, p) for p in printed), (
+                f"{command.line}: documented\n  {line}\nprinted\n{err}")
         else:
             assert _masked(line) in {_masked(p) for p in printed}, (
                 f"{command.line}: documented\n  {line}\nprinted\n{out}")
@@ -153,6 +186,37 @@ def course_maps_url():
         return
     with serving(course_files(SHARED_MAPS)) as url:
         yield url
+
+
+#: A documented error line (docs/flying.md) and what another machine may print for it.
+REFUSAL = ("quadnav: error: the tello vehicle cannot fly this trajectory: speed 9.82 m/s "
+           "exceeds the limit 7.2 m/s at t = 1.25 s (with 10% kept for control); the same "
+           "path flies within every limit at --speed 6.57 --accel 7.86 or less")
+
+
+def test_a_documented_number_may_differ_in_its_last_digit():
+    # Rounded the other way (9.815 on one machine, 9.825 on another), a peak a sample
+    # later, a value written with 3 digits that another machine writes with 3 more.
+    for shown, printed in (("9.82", "9.83"), ("1.25 s", "1.24 s"), ("7.2 m/s", "7.2049 m/s"),
+                           ("--speed 6.57", "--speed 6.56")):
+        assert _says(REFUSAL, REFUSAL.replace(shown, printed)), printed
+    assert _says("thrust-to-weight ratio 2 exceeds", "thrust-to-weight ratio 2.01 exceeds")
+
+
+def test_a_documented_line_with_a_number_clearly_off_or_other_words_is_not_printed():
+    for shown, printed in (("9.82", "9.91"), ("--accel 7.86", "--accel 7.7"),
+                           ("--speed 6.57", "--speed 6"), ("10%", "11%"),
+                           ("the tello", "the rbe595"), ("exceeds", "is below")):
+        assert not _says(REFUSAL, REFUSAL.replace(shown, printed)), printed
+    # Digits of a name are words; a one- or two-digit whole number is exact.
+    assert not _says("map rbe595/map1.txt", "map rbe596/map1.txt")
+    assert not _says("map rbe595/map1.txt", "map rbe595/map2.txt")
+    assert not _says("maze.json:12: blocks[3]", "maze.json:13: blocks[3]")
+    assert not _says("maze.json:12: blocks[3]", "maze.json:12: blocks[4]")
+    command = DocCommand("quadnav fly --speed 10 --accel 20", [REFUSAL])
+    _check_output(command, 2, "", REFUSAL.replace("1.25", "1.26") + "\n")
+    with pytest.raises(AssertionError, match="documented"):
+        _check_output(command, 2, "", REFUSAL.replace("7.86", "8.3") + "\n")
 
 
 @pytest.mark.parametrize("page", PAGES_RUN)

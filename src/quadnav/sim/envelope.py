@@ -46,6 +46,10 @@ HEADROOM = 0.9
 TORQUE_HEADROOM = 0.5
 #: Rounds of slowing a trajectory down (remaking it each time) until the vehicle flies it.
 SLOWING_ROUNDS = 4
+#: How much slower than the least slowing that would do the advice flies: the advice
+#: must fly on any machine, so it keeps a margin to the limit it would otherwise meet
+#: to the last digits (4 % of a roll/pitch acceleration, which goes as its 4th power).
+ADVICE_SLACK = 1.01
 
 
 def vehicle_limits(vehicle: VehicleParams, gains: Gains) -> Limits:
@@ -106,12 +110,13 @@ def _slowed(path: FloatArray, settings: TrajectorySettings, space: SafeSpace,
     """A slower trajectory through ``path`` within ``limits`` and its settings: the
     acceleration limit (and the top speed too, if the speed is what breaks a limit)
     lowered by the factor that would slow ``trajectory`` (whose feasibility is
-    ``report``) into the limits, for up to :data:`SLOWING_ROUNDS` rounds; None if none
-    is within."""
+    ``report``) into the limits, and :data:`ADVICE_SLACK` more, for up to
+    :data:`SLOWING_ROUNDS` rounds; None if none is within."""
     for _ in range(SLOWING_ROUNDS):
         scale = slowest_feasible_scale(trajectory, limits)
         if scale is None:
             return None
+        scale *= ADVICE_SLACK
         too_fast = report.max_speed.value > limits.v_max
         settings = settings.replace(
             v_max=_down(settings.v_max / scale) if too_fast else settings.v_max,
