@@ -35,19 +35,26 @@ class _StopHandler:
     def __init__(self) -> None:
         self.holding = 0  # one for each reason; numba's lock is re-entrant
         self.held: int | None = None
+        #: The stop last raised: an extension module whose loading it cut short may report
+        #: an ImportError that has lost it as its cause (numpy's C-level imports do).
+        self.raised: KeyboardInterrupt | None = None
 
     def __call__(self, signum: int, frame: FrameType | None) -> None:
         if self.holding:
             self.held = self.held or signum
         else:
-            raise interrupt_for(signum)
+            self._raise(signum)
 
     def on_lock(self, taken: bool) -> None:
         """numba took (``taken``) or let go of its compiler lock."""
         self.holding += 1 if taken else -1
         if not self.holding and self.held is not None:
             signum, self.held = self.held, None
-            raise interrupt_for(signum)
+            self._raise(signum)
+
+    def _raise(self, signum: int) -> NoReturn:
+        self.raised = interrupt_for(signum)
+        raise self.raised
 
 
 _stop_handler = _StopHandler()
@@ -91,10 +98,13 @@ def interrupted_exit_code(interrupt: KeyboardInterrupt) -> int:
     return 128 + signal_of(interrupt)
 
 
-def report_stop(error: KeyboardInterrupt | ImportError) -> int:
+def report_stop(error: KeyboardInterrupt | ImportError,
+                raised: KeyboardInterrupt | None = None) -> int:
     """Say on one line that the run was stopped, and return the exit code, when ``error``
-    is a Ctrl-C or stop signal or an import it interrupted; otherwise raise it again."""
-    interrupt = interrupt_behind(error)
+    is a Ctrl-C or stop signal or an import it interrupted (its cause, or ``raised``: the
+    stop the handlers raised during the import, which some extension modules' ImportError
+    no longer names); otherwise raise it again."""
+    interrupt = interrupt_behind(error) or raised
     if interrupt is None:
         raise error
     return report_interrupt(interrupt)
@@ -118,7 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             watch_kernel_loads()  # a command runs: it loads compiled kernels (--help does not)
         from quadnav.cli.main import main as run_command_line
     except (KeyboardInterrupt, ImportError) as error:
-        return report_stop(error)
+        return report_stop(error, _stop_handler.raised)
     return run_command_line(argv)
 
 
