@@ -308,7 +308,8 @@ def test_the_imperfections_are_drawn_from_the_seed(client_ns, tmp_path):
                                    seed=seed)
         _, positions = drone.track()
         ends[run] = (positions[:, 2].max(), positions[-1, :2])
-    # the flight itself runs on the wall clock: equal to a centimetre or so, not to the bit
-    assert ends[0][0] == pytest.approx(ends[1][0], abs=0.01)
+    # the flight itself runs on the wall clock: equal to a centimetre or two (a loaded
+    # machine's late replies move it), not to the bit, and far from another seed's
+    assert ends[0][0] == pytest.approx(ends[1][0], abs=0.03)
     assert np.allclose(ends[0][1], ends[1][1], atol=0.02)
     assert abs(ends[0][0] - ends[2][0]) > 0.05  # seed 5 takes off 15 cm lower than seed 6
