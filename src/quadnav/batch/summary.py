@@ -4,9 +4,9 @@ and ``summary.json``.
 A group is every distinct combination of the grid values but the seed: map, speed, wind,
 gusts, spread, planner and gains, and the start, goal and margin when they were given
 (not drawn from each seed). Success is the mission's own: the goal reached within the
-tolerance with no contact; a refused mission counts as a failure. Apart from it, each rate
-counts the flights that kept less margin than asked off the legs (``margin_shortfall_m``
-above 0, by any amount), successes or not.
+tolerance with no contact and the body inside the map; a refused mission counts as a failure.
+Apart from it, each rate counts the flights that kept less margin than asked off the legs
+(``margin_shortfall_m`` above 0, by any amount), successes or not.
 """
 
 from __future__ import annotations

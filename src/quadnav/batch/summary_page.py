@@ -313,14 +313,16 @@ def summary_html(summary: dict[str, Any], rows: Sequence[dict[str, Any]], folder
              f" (stopped: {summary['finished']} of {summary['missions']} missions finished; "
              "running the batch again finishes it)")
     overall = (f"<p><b>{summary['successes']} of {summary['finished']}</b> missions reached "
-               f"the goal with no contact: {_percent(summary['success_rate'])} % (95 % "
+               "the goal with no contact, the body inside the map: "
+               f"{_percent(summary['success_rate'])} % (95 % "
                f"interval {_percent(summary['ci_low'])}&ndash;{_percent(summary['ci_high'])} %)"
                f"{html.escape(state)}; {summary['errors']} refused (bad query or settings); "
                f"{summary['short_of_margin']} kept less margin than asked off the legs (by "
                "any amount).</p>")
     body = [f"<h1>quadnav batch summary</h1><p class=\"muted\">folder "
             f"{html.escape(str(folder))}; written by quadnav {__version__}. A success is a "
-            "mission that reached the goal within the tolerance with no contact; a refused "
+            "mission that reached the goal within the tolerance with no contact and its body "
+            "inside the map; a refused "
             "mission counts as a failure. Intervals are Wilson 95 % score intervals.</p>",
             overall]
     if labels.groups:

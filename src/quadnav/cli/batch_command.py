@@ -124,7 +124,7 @@ def batch(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - began
     overall = rate(run.finished)
     print(f"{overall['successes']} of {overall['n']} missions reached the goal with no "
-          f"contact: {100 * overall['success_rate']:.1f} % (95 % interval "
+          f"contact, the body inside the map: {100 * overall['success_rate']:.1f} % (95 % interval "
           f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
