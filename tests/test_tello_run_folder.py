@@ -112,8 +112,8 @@ def test_the_folder_records_the_true_track_and_the_estimates_drift_from_it(tello
     # drift from the truth
     assert m["true_landing_m"] == pytest.approx(truth[-1, 1:].tolist())
     assert m["true_landing_m"] == pytest.approx(emulated[-1].tolist(), abs=0.01)
-    assert m["true_final_error_m"] == pytest.approx(
-        np.linalg.norm(emulated[-1, :2] - np.asarray(ROOM_GOAL[:2])), abs=1e-6)
+    assert m["true_final_error_m"] == pytest.approx(  # truth.csv's digits: micrometres
+        np.linalg.norm(emulated[-1, :2] - np.asarray(ROOM_GOAL[:2])), abs=1e-5)
     assert m["landing_drift_m"] == pytest.approx(
         np.linalg.norm(np.subtract(m["landing_m"], m["true_landing_m"])[:2]), abs=1e-9)
     drifts = drift(flight, truth)
