@@ -114,9 +114,9 @@ class KinoFlight:
 
     @property
     def success(self) -> bool:
-        """The flight ran to the end with no contact and ended within
-        ``settings.goal_tolerance`` of the goal asked for, ``world.goal`` (where the plan
-        ends: :func:`fly_kino_plan` checks it)."""
+        """The flight ran to the end with no contact, its body inside the map, and ended
+        within ``settings.goal_tolerance`` of the goal asked for, ``world.goal`` (where the
+        plan ends: :func:`fly_kino_plan` checks it); :func:`~quadnav.mission.flight_succeeded`."""
         return flight_succeeded(self.flight, self.settings.goal_tolerance)
 
     def metrics(self) -> dict:

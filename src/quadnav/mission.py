@@ -142,7 +142,8 @@ class Mission:
 
     @property
     def success(self) -> bool:
-        """Goal reached within tolerance with no collision."""
+        """The flight reached the goal flown to within the goal tolerance, with no contact
+        (a block or the floor) and its body inside the map (:func:`flight_succeeded`)."""
         return self.flight is not None and flight_succeeded(self.flight,
                                                              self.settings.sim.goal_tolerance)
 
@@ -234,8 +235,10 @@ def least_margin_time(t: FloatArray, stretches: FloatArray, window: tuple[float,
 
 
 def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
-    """Whether the flight ran to the end without contact, its body never left the map
-    after the start, and it ended near the goal."""
+    """Whether the flight ran to the end (no contact with a block, no crash into the floor,
+    no leaving the boundary, no divergence), its body never left the map after the start,
+    and it ended within ``goal_tolerance`` m of the end of its reference (the goal flown
+    to)."""
     return (flight.ending is Ending.COMPLETED and not flight.body_outside
             and flight.final_error <= goal_tolerance)
 

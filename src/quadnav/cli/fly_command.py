@@ -168,10 +168,11 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
                     f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
-                    "reaches the goal without touching a block, its body inside the map; 1 "
-                    "on a collision, the body leaving the map, a missed goal or no path "
-                    "(metrics.json is still written), and with --strict when the flight kept "
-                    "less margin than asked; 2 on bad input.")
+                    "reaches the goal (within the goal tolerance of the point flown to) "
+                    "without touching a block or hitting the floor, its body inside the map; "
+                    "1 on a collision, hitting the floor, the body leaving the map, a missed "
+                    "goal or no path (metrics.json is still written), and with --strict when "
+                    "the flight kept less margin than asked; 2 on bad input.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
     add_margin_argument(p)

@@ -20,8 +20,9 @@ quadrotor`` plans in a 3D map. Both write into the output folder:
   writes, read by ``report``, ``view``, ``animate`` and ``blender``.
 
 Exit 0 when the goal region is reached (and, with ``--fly``, the flight succeeded); 1 when
-it is not or the flight failed (the CSV files are removed when there is no plan, and the
-rest is still written); 2 on bad input, as one line on stderr with nothing written.
+it is not or the flight failed, or with ``--strict`` kept less margin than asked (the CSV
+files are removed when there is no plan, and the rest is still written); 2 on bad input, as
+one line on stderr with nothing written.
 """
 
 from __future__ import annotations

@@ -99,8 +99,8 @@ def add_track_command(subparsers: argparse._SubParsersAction) -> None:
                     f"the figures {', '.join(FIGURES)} and the report {REPORT}. Exit 0 when "
                     "the flight runs to the end and finishes within "
                     f"{100 * SimSettings.goal_tolerance:g} cm of the reference's end; 1 when "
-                    "it does not (it diverged, left the box or ended too far); 2 on bad "
-                    "input.")
+                    "it does not (it diverged, left the box, hit the floor, its body "
+                    "left the box or it ended too far); 2 on bad input.")
     p.add_argument("reference", metavar="REF",
                    help="a built-in reference spec (quadnav references lists them), e.g. "
                         "step:axis=z,size=0.5 or helix:radius=2,speed=1.5; or a file: "
