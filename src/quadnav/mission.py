@@ -165,7 +165,7 @@ class Mission:
         } | plant
 
     def metrics(self) -> dict:
-        """JSON-ready summary (see the README's list of ``metrics.json`` keys)."""
+        """JSON-ready summary, written as ``metrics.json`` (docs/flying.md lists its keys)."""
         problem = self.problem
         return {
             "success": self.success,
