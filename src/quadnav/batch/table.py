@@ -50,8 +50,7 @@ GRID_COLUMNS: tuple[tuple[str, str], ...] = (
 )
 #: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
 METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
-    ("success", BOOL), *((f"start_{a}", FLOAT) for a in AXES),
-    *((f"goal_{a}", FLOAT) for a in AXES), *((f"goal_asked_{a}", FLOAT) for a in AXES),
+    ("success", BOOL), *((f"{point}_{a}", FLOAT) for point in POINTS for a in AXES),
     ("margin_m", FLOAT), ("start_leg_m", FLOAT),
     ("goal_leg_m", FLOAT), ("vehicle", STR), ("speed_m_s", FLOAT), ("path_found", BOOL),
     ("path_length_m", FLOAT), ("path_vertices", INT), ("planning_time_s", FLOAT),
