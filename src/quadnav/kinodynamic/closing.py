@@ -41,13 +41,13 @@ def closing_accelerations(state: FloatArray, goal: FloatArray, halves: FloatArra
 
 
 def closing_candidates(model: SampledQuadrotor, state: FloatArray, goal: FloatArray
-                       ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+                       ) -> tuple[FloatArray, FloatArray]:
     """The closing stops from ``state`` (6,) to rest at ``goal`` (3,) that ``model`` can
-    fly, shortest first: ``(halves (n,) s, first accelerations (n, 3), second (n, 3),
-    controls (n, 2, 3))``; each acceleration at most :data:`CLOSING_ACCELERATION` and
-    within the model's limits, the speed between them within its speed limit (the speed
-    along a constant acceleration is convex in time, so the ends bound it: ``state``'s
-    speed, the middle one, and 0). n may be 0."""
+    fly, shortest first: ``(halves (n,) s, controls (n, 2, 3))``, the controls of the two
+    accelerations (:func:`closing_accelerations`); each acceleration at most
+    :data:`CLOSING_ACCELERATION` and within the model's limits, the speed between them
+    within its speed limit (the speed along a constant acceleration is convex in time, so
+    the ends bound it: ``state``'s speed, the middle one, and 0). n may be 0."""
     count = int(np.floor(np.log(LONGEST_HALF / SHORTEST_HALF) / np.log(HALF_GROWTH))) + 1
     halves = SHORTEST_HALF * HALF_GROWTH ** np.arange(count)
     first, second = closing_accelerations(state, goal, halves)
@@ -62,5 +62,4 @@ def closing_candidates(model: SampledQuadrotor, state: FloatArray, goal: FloatAr
         if pair[0] is not None and pair[1] is not None:
             rows.append(row)
             controls.append(pair)
-    rows = np.array(rows, dtype=np.int64)
-    return halves[rows], first[rows], second[rows], np.array(controls).reshape(-1, 2, 3)
+    return halves[np.array(rows, dtype=np.int64)], np.array(controls).reshape(-1, 2, 3)

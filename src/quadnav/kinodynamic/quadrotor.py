@@ -269,7 +269,7 @@ class _Extender:
         ``(goal, 0)``: the shortest candidate (:func:`closing_candidates`) whose pieces
         stay above the floor and are free (all chords of all candidates in one batch);
         ``None`` when there is none."""
-        halves, _, _, controls = closing_candidates(self.model, state, goal)
+        halves, controls = closing_candidates(self.model, state, goal)
         accelerations = self.model.acceleration(controls)  # (n, 2, 3)
         middles = exact_states(state, accelerations[:, 0], halves)
         starts = np.concatenate([np.broadcast_to(state, middles.shape), middles])
