@@ -155,11 +155,11 @@ def tello_fly(args: argparse.Namespace) -> int:
         flown = fly(plan, settings, staging, host=host, truth=args.truth)
     written = write_run(tello_run_content(plan, settings, flown, host), folder,
                         figures=not args.no_figures)
-    outcome = flown.outcome
-    stream = sys.stdout if outcome.status in (Status.LANDED, Status.DRY_RUN) else sys.stderr
-    print(f"quadnav: tello: {outcome.status.value}: {outcome.message}", file=stream)
+    outcome, code = flown.outcome, exit_code(flown.outcome)
+    print(f"quadnav: tello: {outcome.status.value}: {outcome.message}",
+          file=sys.stdout if code == 0 else sys.stderr)
     print(f"wrote {', '.join(str(folder / name) for name in (LOG_NAME, TRACK_FIGURE, *written))}")
-    return exit_code(outcome)
+    return code
 
 
 def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
