@@ -39,7 +39,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from tqdm import tqdm
 
 from quadnav.arrays import FloatArray
 from quadnav.cli.args import (
@@ -61,7 +60,7 @@ from quadnav.cli.flight_args import (
     add_vehicle_arguments,
     vehicle_and_gains,
 )
-from quadnav.cli.progress import fraction_bar, terminal_bar
+from quadnav.cli.progress import fraction_bar, percent_bar
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -116,26 +115,12 @@ def settings_from(args: argparse.Namespace) -> KinoSettings:
 
 
 def search(label: str, quiet: bool, planner: Callable[[Progress], KinoResult]) -> KinoResult:
-    """Run ``planner(progress)`` under a progress bar on stderr.
-
-    The bar appears at the first progress report, so input the planner rejects before
-    searching leaves stderr to the one-line error.
-    """
-    bar: tqdm | None = None
-
-    def progress(fraction: float, closest: float) -> None:
-        nonlocal bar
-        if bar is None:
-            bar = terminal_bar(quiet, total=100, desc=label, unit="%", leave=False,
-                               bar_format="{desc}: {bar} {n:.0f}%{postfix}")
-        bar.set_postfix_str(f"closest {closest:.2f} m", refresh=False)
-        bar.update(100 * fraction - bar.n)
-
-    try:
-        return planner(progress)
-    finally:
-        if bar is not None:
-            bar.close()
+    """Run ``planner(progress)`` under a progress bar on stderr (:func:`~quadnav.cli.
+    progress.percent_bar`: drawn from the first report, so input the planner rejects before
+    searching leaves stderr to the one-line error)."""
+    with percent_bar(label, quiet) as progress:
+        return planner(lambda fraction, closest: progress(fraction,
+                                                          f"closest {closest:.2f} m"))
 
 
 def table_csv(header: Sequence[str], columns: Sequence[FloatArray]) -> str:

@@ -19,18 +19,19 @@ def terminal_bar(quiet: bool, **options: Any) -> tqdm:
 
 
 @contextmanager
-def planning_bar(name: str, quiet: bool) -> Iterator[Callable[[float, float], None]]:
-    """A bar for a search; yields ``progress(fraction of the budget, best length m)``.
-    The bar appears at the first report, so input refused before the search leaves
-    stderr to the one-line error."""
+def percent_bar(name: str, quiet: bool) -> Iterator[Callable[[float, str | None], None]]:
+    """A :func:`terminal_bar` of the percent of a job done; yields ``progress(fraction
+    done, postfix)``, ``postfix`` a few words shown after the percent (None: those shown
+    last). The bar appears at the first report, so input refused before the job starts
+    leaves stderr to the one-line error, and it can be set up before earlier stages."""
     bars: list[tqdm] = []
 
-    def progress(fraction: float, best: float) -> None:
+    def progress(fraction: float, postfix: str | None) -> None:
         if not bars:
             bars.append(terminal_bar(quiet, total=100, desc=name, unit="%", leave=False,
                                      bar_format="{desc}: {bar} {n:.0f}%{postfix}"))
-        bars[0].set_postfix_str(f"best {best:.2f} m" if best < float("inf") else "no path yet",
-                                refresh=False)
+        if postfix is not None:
+            bars[0].set_postfix_str(postfix, refresh=False)
         bars[0].update(100 * fraction - bars[0].n)
 
     try:
@@ -41,19 +42,17 @@ def planning_bar(name: str, quiet: bool) -> Iterator[Callable[[float, float], No
 
 
 @contextmanager
+def planning_bar(name: str, quiet: bool) -> Iterator[Callable[[float, float], None]]:
+    """A :func:`percent_bar` for a search; yields ``progress(fraction of the budget, best
+    length m)``."""
+    with percent_bar(name, quiet) as progress:
+        yield lambda fraction, best: progress(
+            fraction, f"best {best:.2f} m" if best < float("inf") else "no path yet")
+
+
+@contextmanager
 def fraction_bar(name: str, quiet: bool) -> Iterator[Callable[[float], None]]:
-    """A bar for a job that reports the fraction done; yields ``progress(fraction)``.
-    The bar appears at the first report, so it can be set up before earlier stages."""
-    bars: list[tqdm] = []
-
-    def progress(fraction: float) -> None:
-        if not bars:
-            bars.append(terminal_bar(quiet, total=100, desc=name, unit="%", leave=False,
-                                     bar_format="{desc}: {bar} {n:.0f}%"))
-        bars[0].update(100 * fraction - bars[0].n)
-
-    try:
-        yield progress
-    finally:
-        for bar in bars:
-            bar.close()
+    """A :func:`percent_bar` for a job that reports the fraction done alone; yields
+    ``progress(fraction)``."""
+    with percent_bar(name, quiet) as progress:
+        yield lambda fraction: progress(fraction, None)
