@@ -25,14 +25,14 @@ KIND_LABELS = {START_GOAL: "start/goal"}
 def list_maps(args: argparse.Namespace) -> int:
     """Print every course map: name, kind, course, status and origin, then the cache."""
     entries = list(catalogue().values())
+    statuses = [status(e) for e in entries]  # a fetched file's is its SHA-256, read once
     rows = [("name", "kind", "course", "status", "origin")] + [
-        (e.name, KIND_LABELS.get(e.kind, e.kind), e.course, status(e), e.origin)
-        for e in entries]
+        (e.name, KIND_LABELS.get(e.kind, e.kind), e.course, state, e.origin)
+        for e, state in zip(entries, statuses, strict=True)]
     widths = [max(len(row[i]) for row in rows) for i in range(4)]
     for row in rows:
         print("  ".join(f"{cell:<{width}}" for cell, width in zip(row, widths, strict=False))
               + "  " + row[4])
-    statuses = [status(e) for e in entries]
     print(f"{statuses.count('shipped')} shipped with quadnav, {statuses.count('fetched')} of "
           f"{len(entries) - statuses.count('shipped')} fetched into the cache {cache_dir()} "
           f"(${CACHE_ENV} moves it)")
