@@ -27,6 +27,7 @@ import json
 import math
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import product
 from pathlib import Path
@@ -376,16 +377,22 @@ def _gains(value: Any, folder: Path, src: _Source) -> str:
                  f"({', '.join(course_gain_names())}) or a gains TOML file", src)
 
 
+def _named(value: Any, folder: Path, is_name: Callable[[str], bool]) -> bool:
+    """Whether ``value`` is a name ``is_name`` knows (a course file, a built-in world
+    spec) that no file in the spec's ``folder`` has."""
+    return isinstance(value, str) and is_name(value) and not (folder / value).is_file()
+
+
 def _map_name(value: Any, folder: Path, key: str, src: _Source) -> str:
     """A map file (resolved), a built-in world spec, or a course map (``course:NAME``,
     shipped or fetched: checked here, before any mission flies)."""
-    if isinstance(value, str) and is_course_name(value) and not (folder / value).is_file():
+    if _named(value, folder, is_course_name):
         try:
             read_course_file(value, MAP)
         except MapError as error:
             raise src.error(key, str(error)) from None
         return value
-    if isinstance(value, str) and is_builtin_spec(value) and not (folder / value).is_file():
+    if _named(value, folder, is_builtin_spec):
         return value
     return _file(value, folder, key, "a map file, a built-in world spec or a course map "
                  "(course:NAME)", src)
@@ -415,7 +422,7 @@ def _map_entry(item: Any, folder: Path, src: _Source) -> MapEntry:
 
 def _start_goal(value: Any, folder: Path, src: _Source) -> tuple:
     """(start, goal) from a start/goal file (resolved) or a course one (``course:NAME``)."""
-    if isinstance(value, str) and is_course_name(value) and not (folder / value).is_file():
+    if _named(value, folder, is_course_name):
         try:
             return read_start_goal(value)
         except MapError as error:
