@@ -254,18 +254,24 @@ def _pixel(driver, point) -> tuple[int, int, int]:
     return image.getpixel((round(x), round(y)))
 
 
-def test_a_block_in_front_hides_what_is_behind_it(browser, pillar):
+def _set_view(driver, azimuth: float, elevation: float) -> None:
+    """Turn the camera to ``azimuth`` and ``elevation`` (degrees) and wait for the frame
+    drawn after."""
     from selenium.webdriver.support.ui import WebDriverWait
 
+    frames = driver.execute_script("return Number(document.getElementById('view')"
+                                   ".dataset.frames)")
+    driver.execute_script(f"quadnavViewer.setView({azimuth}, {elevation})")
+    WebDriverWait(driver, 5, poll_frequency=0.05).until(
+        lambda d: d.execute_script(
+            "return Number(document.getElementById('view').dataset.frames)") > frames)
+
+
+def test_a_block_in_front_hides_what_is_behind_it(browser, pillar):
     _open(browser, pillar)
     crossing = (5.0, 8.0, 2.0)  # on the path, straight behind the block's middle from -y
     for azimuth, path_in_front in ((-90, False), (90, True)):
-        frames = browser.execute_script("return Number(document.getElementById('view')"
-                                        ".dataset.frames)")
-        browser.execute_script(f"quadnavViewer.setView({azimuth}, 10)")
-        WebDriverWait(browser, 5, poll_frequency=0.05).until(
-            lambda d, n=frames: d.execute_script(
-                "return Number(document.getElementById('view').dataset.frames)") > n)
+        _set_view(browser, azimuth, 10)
         red, green, blue = _pixel(browser, crossing)
         if path_in_front:
             assert red > 150 and blue < 100, (red, green, blue)  # the path's red
@@ -297,23 +303,13 @@ def tello_truth(tmp_path_factory):
 
 
 def test_a_tello_runs_true_track_is_drawn_beside_its_estimate(browser, tello_truth):
-    from selenium.webdriver.support.ui import WebDriverWait
-
     _open(browser, tello_truth)
     labels = browser.find_element("id", "layers").text
     assert "flown track" in labels and "true track" in labels
-    frames = browser.execute_script("return Number(document.getElementById('view')"
-                                    ".dataset.frames)")
-    browser.execute_script("quadnavViewer.setView(-90, 80)")  # nearly from above
-    WebDriverWait(browser, 5, poll_frequency=0.05).until(
-        lambda d: d.execute_script(
-            "return Number(document.getElementById('view').dataset.frames)") > frames)
+    _set_view(browser, -90, 80)  # nearly from above
     on_truth = (2.0, 1.4, 0.8)  # halfway along, where nothing else is drawn
     assert _purple_near(browser, on_truth)  # the true track's
-    before = _canvas_png(browser)
-    browser.find_element("xpath", "//div[@id='layers']/label[contains(., 'true track')]"
-                                  "/input").click()
-    _redrawn(browser, before)
+    _toggle(browser, "true track")
     assert not _purple_near(browser, on_truth)  # hidden with its layer
     assert _errors(browser) == []
 
