@@ -21,11 +21,10 @@ control rate when every eigenvalue of the transition lies inside the unit circle
 rate-loop gains at once: the rotors giving that many times the torque the controller expects)
 could grow before the sampled loop turns unstable; sampling slower shrinks it. A rate at which
 some axis's loop is unstable (a gain margin of at most 1) is refused; one that leaves less than
-the textbook's 2 (6 dB, :data:`GAIN_MARGIN`) is warned about. The default gains at the default
-1 kHz keep 33 (SE(3)) to 62 (cascade); SE(3) on the Tello keeps 3.4 at 100 Hz (rotorpy's own
-rate for these gains) and turns unstable below 28 Hz, the cascade below 20 Hz, within 4 % of
-where the simulated loop does (``tests/test_control_rate.py``). A controller of another kind
-is not checked.
+the textbook's 2 (6 dB, :data:`GAIN_MARGIN`) is warned about. What the default gains keep,
+and the lowest rates they are stable at, are in docs/flying.md (*Control rate*);
+``tests/test_control_rate.py`` checks them, and the lowest stable rates against the rates at
+which the simulated loop turns unstable. A controller of another kind is not checked.
 """
 
 from __future__ import annotations
