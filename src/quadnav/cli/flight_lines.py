@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 from quadnav.arrays import FloatArray
+from quadnav.world.placement import format_point
 
 #: What ``--strict`` adds to the failure line when a flight kept less margin than asked.
 STRICT_FAILURE = "it kept less margin than asked (--strict)"
@@ -46,7 +47,7 @@ def margin_shortfall(m: dict, t: FloatArray, positions: FloatArray) -> str | Non
     place = positions[min(int(np.searchsorted(t, time)), len(t) - 1)]
     return (f"the flight kept only {m['flight_margin_m']:.3f} m of the {m['margin_m']:g} m "
             f"margin asked off the legs ({short:.3g} m short), least at t = {time:.2f} s "
-            f"near ({', '.join(f'{v:.2f}' for v in place)})")
+            f"near {format_point(place, '.2f')}")
 
 
 def warn_margin_shortfall(m: dict, t: FloatArray, positions: FloatArray) -> bool:

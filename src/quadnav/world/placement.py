@@ -49,9 +49,10 @@ class PointReport:
         return f"{self.label} {format_point(self.point)}: {self.detail}"
 
 
-def format_point(point: ArrayLike) -> str:
-    """``(x, y, z)`` with up to 4 decimals, for messages."""
-    return "(" + ", ".join(f"{v:.4g}" for v in np.asarray(point, dtype=float)) + ")"
+def format_point(point: ArrayLike, spec: str = ".4g") -> str:
+    """``(x, y, z)``, each coordinate in the format ``spec`` (by default 4 significant
+    digits), for messages."""
+    return "(" + ", ".join(f"{v:{spec}}" for v in np.asarray(point, dtype=float)) + ")"
 
 
 def format_estimate(point: ArrayLike, sigma: float) -> str:
