@@ -42,8 +42,6 @@ SUMMARY_HTML = "summary.html"
 #: 1100 pixels wide, the report's width).
 DPI = 120
 WIDTH = 9.0
-#: Grid values that give a heat map its panels (maps and speeds are its rows and columns).
-PANEL_COLUMNS = ("wind_x", "wind_y", "wind_z", "gusts", "spread", "planner", "gains")
 #: Distributions drawn: column, axis label, scale to the unit shown.
 DISTRIBUTIONS = (("rms_tracking_error_m", "RMS tracking\nerror (cm)", 100.0),
                  ("min_clearance_m", "least clearance\nfrom a block (m)", 1.0),
