@@ -55,8 +55,8 @@ MIN_ANGLE_SPAN = 2.0
 
 def run_outcome(metrics: dict) -> str:
     """``success`` (saying so when the flight kept less margin than asked), or why the run
-    failed (from metrics.json): no path, the flight's ending and when, or the goal (a
-    track: the reference's end) missed."""
+    failed (from metrics.json): no path, the flight's ending and when, the body leaving the
+    map, or the goal (a track: the reference's end) missed."""
     if not metrics.get("path_found", True):
         return "no path"
     if metrics["success"] and metrics.get("margin_shortfall_m"):
@@ -64,6 +64,9 @@ def run_outcome(metrics: dict) -> str:
                 f"{metrics['margin_m']:g} m margin")
     if metrics["success"]:
         return "success"
+    if metrics["ending"] == Ending.COMPLETED.value and metrics.get("body_outside_m"):
+        return (f"the body left the map by {CM_PER_M * metrics['body_outside_m']:.1f} cm at "
+                f"{metrics['body_outside_since_s']:.2f} s")
     if metrics["ending"] == Ending.COMPLETED.value:
         return f"goal missed by {metrics['final_error_m']:.2f} m"
     return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
