@@ -21,8 +21,9 @@ from scipy.spatial.transform import Rotation
 from quadnav.errors import PlanningWarning
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings, make_problem
+from quadnav.runs import read_run, run_outcome
 from quadnav.vehicle.params import load_params
-from quadnav.viz.flight_figures import run_outcome
+from quadnav.viz.html_viewer import viewer_data
 from quadnav.world import World, load_world
 from quadnav.world.margins import polyline_margin
 
@@ -149,9 +150,11 @@ def test_a_flight_blown_out_of_the_map_is_not_a_success(tmp_path):
     outside = _body_outside(flight, np.array([0, 0, 0, 4, 4, 3]))
     assert outside.max() == pytest.approx(metrics["body_outside_m"], abs=2e-3)
     assert flight[:, 1].max() < 4.0  # the centre never left: the old check saw nothing
-    # the report's and figures' outcome says why too (it said the goal was missed)
+    # the report's, figures' and viewer's outcome says why too (they said the goal was missed)
     assert run_outcome(metrics) == (f"the body left the map by {100 * metrics['body_outside_m']:.1f}"
                                     f" cm at {metrics['body_outside_since_s']:.2f} s")
+    subtitle = viewer_data(read_run(tmp_path / "run"))["subtitle"]
+    assert subtitle.startswith(f"FAILED: {run_outcome(metrics)} \u00b7 "), subtitle
 
 
 def test_the_body_is_measured_at_its_attitude_and_after_its_start_move_only():

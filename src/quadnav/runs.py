@@ -40,7 +40,7 @@ from quadnav.mission import Mission
 from quadnav.planning.report import path_csv
 from quadnav.planning.result import IntArray, tree_edges
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
-from quadnav.sim.flight import Flight
+from quadnav.sim.flight import Ending, Flight
 from quadnav.tracking import Tracking
 from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
 from quadnav.trajectory.reference import Reference, Samples
@@ -212,6 +212,25 @@ class Run:
     def title(self) -> str:
         """What the run flew: the reference of a track, else the map."""
         return self.metrics["reference"] if self.is_track else self.metrics["map"]
+
+
+def run_outcome(metrics: dict) -> str:
+    """``success`` (saying so when the flight kept less margin than asked), or why the run
+    failed (from metrics.json): no path, the flight's ending and when, the body leaving the
+    map, or the goal (a track: the reference's end) missed."""
+    if not metrics.get("path_found", True):
+        return "no path found"
+    if metrics["success"] and metrics.get("margin_shortfall_m"):
+        return (f"success, but kept only {metrics['flight_margin_m']:.3f} m of the "
+                f"{metrics['margin_m']:g} m margin")
+    if metrics["success"]:
+        return "success"
+    if metrics["ending"] == Ending.COMPLETED.value and metrics.get("body_outside_m"):
+        return (f"the body left the map by {100 * metrics['body_outside_m']:.1f} cm at "
+                f"{metrics['body_outside_since_s']:.2f} s")
+    if metrics["ending"] == Ending.COMPLETED.value:
+        return f"goal missed by {metrics['final_error_m']:.2f} m"
+    return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
 
 
 def read_table(path: Path, header: str, text: str | None = None) -> np.ndarray:

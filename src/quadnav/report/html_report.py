@@ -24,9 +24,9 @@ from matplotlib.figure import Figure
 from quadnav import __version__
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.runs import DRIFT_FIGURE, Run
+from quadnav.runs import DRIFT_FIGURE, Run, run_outcome
 from quadnav.tracking import step_summary
-from quadnav.viz.flight_figures import figure_makers, run_outcome
+from quadnav.viz.flight_figures import figure_makers
 from quadnav.world.placement import format_estimate, format_point
 
 #: File name endings accepted for a report.

@@ -25,9 +25,8 @@ from PIL import Image
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
-from quadnav.runs import Run
+from quadnav.runs import Run, run_outcome
 from quadnav.vehicle.quaternion import to_matrix
-from quadnav.viz.flight_figures import run_outcome
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import draw_world, map_legend
 from quadnav.viz.style import (

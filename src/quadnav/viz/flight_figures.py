@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from quadnav.runs import DRIFT_FIGURE, FIGURES, FlightTable, Run, drift
+from quadnav.runs import DRIFT_FIGURE, FIGURES, FlightTable, Run, drift, run_outcome
 from quadnav.sim.flight import Ending
 from quadnav.sim.step_response import SETTLING_BAND
 from quadnav.vehicle.quaternion import euler_angles
@@ -51,25 +51,6 @@ TITLE_FONT = 10
 HEADROOM = 1.15
 #: Least height of an attitude plot's y range, degrees.
 MIN_ANGLE_SPAN = 2.0
-
-
-def run_outcome(metrics: dict) -> str:
-    """``success`` (saying so when the flight kept less margin than asked), or why the run
-    failed (from metrics.json): no path, the flight's ending and when, the body leaving the
-    map, or the goal (a track: the reference's end) missed."""
-    if not metrics.get("path_found", True):
-        return "no path"
-    if metrics["success"] and metrics.get("margin_shortfall_m"):
-        return (f"success, but kept only {metrics['flight_margin_m']:.3f} m of the "
-                f"{metrics['margin_m']:g} m margin")
-    if metrics["success"]:
-        return "success"
-    if metrics["ending"] == Ending.COMPLETED.value and metrics.get("body_outside_m"):
-        return (f"the body left the map by {CM_PER_M * metrics['body_outside_m']:.1f} cm at "
-                f"{metrics['body_outside_since_s']:.2f} s")
-    if metrics["ending"] == Ending.COMPLETED.value:
-        return f"goal missed by {metrics['final_error_m']:.2f} m"
-    return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
 
 
 def _draw_run(ax: Axes, run: Run) -> list:

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.files import atomic_output
-from quadnav.runs import Run
+from quadnav.runs import Run, run_outcome
 from quadnav.viz.thinning import evenly_spread
 
 #: Tree edges written into the page at most; a larger tree is thinned to an evenly spread
@@ -52,17 +52,11 @@ def _point(value: np.ndarray | None) -> list[float] | None:
 
 
 def _subtitle(metrics: dict) -> str:
-    """One line: the outcome, then the planner, vehicle, top speed, path length and flight
-    time that metrics.json gives (a missing one is left out)."""
-    if metrics.get("success"):
-        outcome = "success"
-    elif not metrics.get("path_found", True):
-        outcome = "FAILED: no path found"
-    elif metrics.get("collision"):
-        outcome = "FAILED: collision"
-    else:
-        outcome = "FAILED: goal missed"
-    parts = [outcome]
+    """One line: the outcome (:func:`~quadnav.runs.run_outcome`, after ``FAILED:`` for a
+    failure), then the planner, vehicle, top speed, path length and flight time that
+    metrics.json gives (a missing one is left out)."""
+    outcome = run_outcome(metrics)
+    parts = [outcome if metrics.get("success") else f"FAILED: {outcome}"]
     for key, text in (("planner", "{}"), ("seed", "seed {}"), ("vehicle", "vehicle {}"),
                       ("speed_m_s", "top speed {:g} m/s"), ("path_length_m", "path {:.2f} m"),
                       ("flight_time_s", "flight {:.2f} s")):
