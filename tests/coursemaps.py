@@ -33,12 +33,17 @@ def course_files(shared: Path) -> dict[str, bytes]:
         else:
             files[url] = data
     for url, members in archives.items():
-        archive = io.BytesIO()
-        with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as opened:
-            for member, data in members.items():
-                opened.writestr(member, data)
-        files[url] = archive.getvalue()
+        files[url] = zipped(members)
     return files
+
+
+def zipped(members: dict[str, bytes]) -> bytes:
+    """A zip archive holding ``members`` (path in the archive -> bytes)."""
+    archive = io.BytesIO()
+    with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as opened:
+        for member, data in members.items():
+            opened.writestr(member, data)
+    return archive.getvalue()
 
 
 @contextmanager

@@ -4,17 +4,15 @@ maps fetched with ``quadnav maps fetch`` (from a loopback server here) into the 
 
 from __future__ import annotations
 
-import io
 import json
 import subprocess
 import sys
-import zipfile
 from pathlib import Path
 from urllib.parse import urlsplit
 
 import pytest
 from clitools import assert_user_error, run_here
-from coursemaps import dead_url, serving
+from coursemaps import dead_url, serving, zipped
 from publicmaps import START_GOAL_FILES, START_GOAL_POINTS, far_apart_free_points
 
 from quadnav.batch.grid import parse_spec
@@ -225,15 +223,9 @@ def test_a_wrong_hash_is_one_line_and_keeps_nothing(cache, monkeypatch):
 def _files_at_their_urls(contents: dict[CourseMap, bytes]) -> dict[str, bytes]:
     """URL path -> bytes serving each entry's ``contents`` where it is fetched from (in a zip
     archive, for a member)."""
-    files = {}
-    for entry, data in contents.items():
-        if entry.member is not None:
-            archive = io.BytesIO()
-            with zipfile.ZipFile(archive, "w") as opened:
-                opened.writestr(entry.member, data)
-            data = archive.getvalue()
-        files[urlsplit(entry.url("http://loopback")).path] = data
-    return files
+    return {urlsplit(entry.url("http://loopback")).path:
+            data if entry.member is None else zipped({entry.member: data})
+            for entry, data in contents.items()}
 
 
 def test_a_dead_server_is_one_line_and_keeps_nothing(cache):
