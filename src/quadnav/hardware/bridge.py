@@ -417,12 +417,18 @@ class _Flight:
                        f"the last command it heard{seen}", signum)
 
 
+def landing_error(plan: FlightPlan, place: Estimate) -> float:
+    """How far, m, the landing ``place`` lies horizontally from the floor under the goal
+    of ``plan``: what the verdict judges, and metrics.json's ``final_error_m``."""
+    return float(np.linalg.norm(place.point[:2] - plan.landing_ground[:2]))
+
+
 def landed(plan: FlightPlan, done: str, place: Estimate) -> Outcome:
     """The outcome of a flight of ``plan`` flown to its end (``done``, in words) and
     landed at ``place``: at the goal if within :data:`LANDING_TOLERANCE` of the floor
-    under it horizontally, else off it."""
+    under it horizontally (:func:`landing_error`), else off it."""
     goal = plan.landing_ground
-    off = float(np.linalg.norm(place.point[:2] - goal[:2]))
+    off = landing_error(plan, place)
     where = f"landed at {place.text}, {off:.2f} m from the goal"
     if off <= LANDING_TOLERANCE:
         return Outcome(Status.LANDED, f"{where}, after {done}", landing=place)

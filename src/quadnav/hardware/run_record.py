@@ -43,7 +43,14 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
-from quadnav.hardware.bridge import LANDING_TOLERANCE, BridgeSettings, Flown, Outcome, Status
+from quadnav.hardware.bridge import (
+    LANDING_TOLERANCE,
+    BridgeSettings,
+    Flown,
+    Outcome,
+    Status,
+    landing_error,
+)
 from quadnav.hardware.dead_reckoning import Estimate
 from quadnav.hardware.flight_plan import FlightPlan
 from quadnav.planning.result import nearest_on_polyline, path_length
@@ -103,8 +110,7 @@ def tello_metrics(plan: FlightPlan, table: FlightTable, outcome: Outcome,
     error = np.linalg.norm(table.position - table.reference, axis=1)
     world = plan.fence.world
     landing = outcome.landing
-    final = (None if landing is None
-             else float(np.linalg.norm(landing.point[:2] - plan.landing_ground[:2])))
+    final = None if landing is None else landing_error(plan, landing)
     # The floor, where it takes off and lands, is not an obstacle: lowered out of the way.
     boundary = world.boundary.copy()
     boundary[2] -= FLOOR_DROP
