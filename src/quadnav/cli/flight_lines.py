@@ -57,3 +57,13 @@ def warn_margin_shortfall(m: dict, t: FloatArray, positions: FloatArray) -> bool
     if line is not None:
         print(f"quadnav: warning: {line}", file=sys.stderr)
     return line is not None
+
+
+def flight_failed(failure: str | None, short: bool, strict: bool) -> bool:
+    """Whether a flight failed: it did not succeed (``failure`` says why; None when it
+    succeeded), or, with ``strict``, it kept less margin than asked (``short``). Prints the
+    one ``quadnav: flight failed: ...`` line on stderr when it did."""
+    why = failure if failure is not None else STRICT_FAILURE if strict and short else None
+    if why is not None:
+        print(f"quadnav: flight failed: {why}", file=sys.stderr)
+    return why is not None

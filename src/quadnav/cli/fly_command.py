@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from quadnav.cli.args import (
@@ -29,7 +28,7 @@ from quadnav.cli.flight_args import (
     vehicle_and_gains,
 )
 from quadnav.cli.flight_lines import (
-    STRICT_FAILURE,
+    flight_failed,
     min_clearance,
     simulation_time,
     tracking_errors,
@@ -98,13 +97,8 @@ def write_mission(mission: Mission, folder: Path, figures: bool, html: bool,
     written = write_run(mission, folder, figures=figures, html=html)
     short = print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
-    if not mission.success:
-        print(f"quadnav: flight failed: {failure_reason(mission)}", file=sys.stderr)
-        return EXIT_FAILED
-    if strict and short:
-        print(f"quadnav: flight failed: {STRICT_FAILURE}", file=sys.stderr)
-        return EXIT_FAILED
-    return 0
+    failure = None if mission.success else failure_reason(mission)
+    return EXIT_FAILED if flight_failed(failure, short, strict) else 0
 
 
 def failure_reason(mission: Mission) -> str:

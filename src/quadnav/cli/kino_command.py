@@ -360,7 +360,7 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
     when it kept less margin than asked); 0 when it succeeded (and, if ``strict``, kept the
     whole margin), else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
     from quadnav.cli.flight_lines import (
-        STRICT_FAILURE,
+        flight_failed,
         min_clearance,
         tracking_errors,
         warn_margin_shortfall,
@@ -384,14 +384,9 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
           f"rotor energy {m['rotor_energy_j']:.1f} J")
     short = warn_margin_shortfall(m, flown.flight.t, flown.flight.position)
     print("wrote " + ", ".join(str(folder / name) for name in written))
-    if not m["success"]:
-        print(f"quadnav: flight failed: "
-              f"{flight_failure(flown.flight, flown.settings.goal_tolerance)}", file=sys.stderr)
-        return EXIT_NOT_REACHED
-    if strict and short:
-        print(f"quadnav: flight failed: {STRICT_FAILURE}", file=sys.stderr)
-        return EXIT_NOT_REACHED
-    return 0
+    failure = (None if m["success"]
+               else flight_failure(flown.flight, flown.settings.goal_tolerance))
+    return EXIT_NOT_REACHED if flight_failed(failure, short, strict) else 0
 
 
 # ------------------------------------------------------------------ arguments
