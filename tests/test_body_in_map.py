@@ -22,6 +22,7 @@ from quadnav.errors import PlanningWarning
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings, make_problem
 from quadnav.runs import read_run, run_outcome
+from quadnav.trajectory.model import YawMode
 from quadnav.vehicle.params import load_params
 from quadnav.viz.html_viewer import viewer_data
 from quadnav.world import World, load_world
@@ -181,3 +182,17 @@ def test_the_body_is_measured_at_its_attitude_and_after_its_start_move_only():
     sideways = body_excursion(t, along, attitudes, HALF, boundary)
     assert sideways.depth == pytest.approx(HALF[0]) and sideways.since == pytest.approx(0.1)
     assert sideways.duration == pytest.approx(0.9)
+
+
+def test_a_mission_that_faces_its_travel_keeps_the_body_inside_at_any_heading():
+    """Turned to face its travel, the Tello's 0.1 x 0.1 m body reaches 7.1 cm along x or y,
+    not the 5 cm it reaches at yaw 0: the start and goal are kept that far inside."""
+    level = MissionSettings()
+    facing = MissionSettings(trajectory=level.trajectory.replace(yaw=YawMode.TRAVEL))
+    assert level.body == pytest.approx([0.05, 0.05, 0.025])
+    assert facing.body == pytest.approx([0.05 * np.sqrt(2), 0.05 * np.sqrt(2), 0.025])
+    world = load_world("empty:size=4x4x3")
+    with pytest.warns(PlanningWarning, match="0.141421 x 0.141421 x 0.05 m body"):
+        mission = fly_mission(world, [1.0, 2.0, 1.0], [4.0, 2.0, 1.0], 0.2, facing)
+    assert mission.problem.goal[0] == pytest.approx(4.0 - 0.05 * np.sqrt(2) - BODY_ROOM)
+    assert mission.success and not mission.flight.body_outside

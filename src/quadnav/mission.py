@@ -33,7 +33,7 @@ from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.model import Trajectory
+from quadnav.trajectory.model import Trajectory, YawMode
 from quadnav.trajectory.space import (
     SafeSpace,
     trajectory_margins,
@@ -113,7 +113,10 @@ class MissionSettings:
     @property
     def body(self) -> FloatArray:
         """(3,) half extents of the flown vehicle's body along x, y, z, m, as missions fly
-        it (at yaw 0): what :func:`~quadnav.planning.make_problem` keeps inside the map."""
+        it: what :func:`~quadnav.planning.make_problem` keeps inside the map. At yaw 0, or at
+        any heading when the trajectory turns the vehicle to face its travel."""
+        if self.trajectory.yaw is YawMode.TRAVEL:
+            return self.flown_vehicle.half_extents_any_heading()
         return self.flown_vehicle.half_extents()
 
 

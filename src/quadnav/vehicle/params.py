@@ -89,6 +89,13 @@ class VehicleParams:
         x, y, z = 0.5 * self.body_size
         return np.array([c * x + s * y, s * x + c * y, z])
 
+    def half_extents_any_heading(self) -> FloatArray:
+        """How far (3,), m, the level body box can reach from its centre along the world's x,
+        y and z axes whatever its heading: the half diagonal of its footprint along x and y
+        (the most :meth:`half_extents` gives over every yaw)."""
+        x, y, z = 0.5 * self.body_size
+        return np.array([math.hypot(x, y), math.hypot(x, y), z])
+
     @property
     def weight(self) -> float:
         """m g, N."""
