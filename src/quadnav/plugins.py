@@ -4,17 +4,35 @@ points, so the ``quadnav`` command and batch workers know them too::
 
     [project.entry-points."quadnav.planners"]
     mine = "my_package.my_module:plan_mine"
+
+A plug-in may also be named where it is, without registering it (:func:`parse_spec`,
+:meth:`Registry.load`): ``module.path:Name`` (an importable module) or ``path/to/file.py:Name``
+(a file, loaded by path), optionally followed by keyword arguments that are Python literals,
+``my_wind.py:Gusty(speed=3.0, axis=[1, 0, 0])`` (read with :func:`ast.literal_eval`, never
+evaluated). A name and its arguments travel between processes as the text itself: a batch
+worker loads the plug-in again from it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+import ast
+import hashlib
+import importlib
+import importlib.util
+import sys
+import traceback
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import Generic, TypeVar
+from pathlib import Path
+from types import MappingProxyType, ModuleType
+from typing import Any, Generic, TypeVar
 
 from quadnav.errors import QuadnavError
 
 Plugin = TypeVar("Plugin", bound=Callable)
+#: quadnav's own folder: frames in it are left out of a plug-in's traceback.
+_PACKAGE = Path(__file__).resolve().parent
 
 
 class Registry(Generic[Plugin]):
@@ -69,3 +87,154 @@ class Registry(Generic[Plugin]):
             raise QuadnavError(f"unknown {self.kind} {name!r}; expected one of "
                                f"{', '.join(self.names())}")
         return self._plugins[name]
+
+    def load(self, text: str) -> tuple[Any, Mapping[str, Any]]:
+        """What ``text`` names (a registered name, ``module:Name`` or ``file.py:Name``, see
+        :func:`parse_spec`) and the keyword arguments it gives. QuadnavError (a
+        :class:`PluginError` for the user's own code) when it cannot be found or loaded."""
+        spec = parse_spec(text, self.kind)
+        if spec.is_located:
+            return load_target(spec.target, self.kind), spec.kwargs
+        if spec.target not in self:
+            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected one of "
+                               f"{', '.join(self.names())}, or module:NAME or file.py:NAME")
+        return self.get(spec.target), spec.kwargs
+
+
+class PluginError(QuadnavError):
+    """A plug-in that could not be loaded or that failed while it ran: one line for the user,
+    plus, when the plug-in's own code raised, that code's traceback (:attr:`details`), which
+    the command line prints once above the line.
+
+    Attributes:
+        details: the traceback of the plug-in's own exception, or None.
+        exit_code: the command's exit code: 2 for a plug-in that cannot be used (bad input),
+            1 for a flight that failed because of it.
+    """
+
+    def __init__(self, message: str, details: str | None = None, exit_code: int = 2) -> None:
+        super().__init__(message)
+        self.details = details
+        self.exit_code = exit_code
+
+
+@dataclass(frozen=True)
+class PluginSpec:
+    """A plug-in as a user names it.
+
+    Attributes:
+        text: the text as given.
+        target: a registered name, ``module.path:Name`` or ``path/to/file.py:Name``.
+        kwargs: the keyword arguments given after it (Python literals), read-only.
+    """
+
+    text: str
+    target: str
+    kwargs: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+
+    @property
+    def is_located(self) -> bool:
+        """Whether :attr:`target` says where the plug-in is (``where:Name``) rather than
+        naming a registered one."""
+        return ":" in self.target
+
+
+def parse_spec(text: str, kind: str = "plug-in") -> PluginSpec:
+    """``text`` read as ``TARGET`` or ``TARGET(key=literal, ...)``; QuadnavError naming it
+    and what was expected for anything else (positional arguments, a value that is not a
+    literal, a missing parenthesis)."""
+    text = text.strip()
+    target, _, arguments = text.partition("(")
+    target = target.strip()
+    expected = (f"{kind} {text!r}: expected NAME, module:NAME or path/to/file.py:NAME, "
+                "optionally with keyword arguments that are literals: NAME(key=value, ...)")
+    if not target or any(c.isspace() for c in target) or target.count(":") > 1 or (
+            ":" in target and not all(target.split(":"))):
+        raise QuadnavError(expected)
+    if not arguments:
+        return PluginSpec(text, target)
+    try:
+        call = ast.parse(f"f({arguments}", mode="eval").body
+    except SyntaxError:
+        raise QuadnavError(expected) from None
+    if not isinstance(call, ast.Call) or call.args or any(k.arg is None for k in call.keywords):
+        raise QuadnavError(f"{kind} {text!r}: give its arguments by keyword, key=value")
+    kwargs: dict[str, Any] = {}
+    for keyword in call.keywords:
+        try:
+            kwargs[str(keyword.arg)] = ast.literal_eval(keyword.value)
+        except ValueError:
+            raise QuadnavError(
+                f"{kind} {text!r}: the value of {keyword.arg} is not a literal (expected a "
+                f"number, string, True/False/None, or a list, tuple or dict of them, got "
+                f"{ast.unparse(keyword.value)})") from None
+    return PluginSpec(text, target, MappingProxyType(kwargs))
+
+
+def load_target(target: str, kind: str = "plug-in") -> Any:
+    """The object ``module.path:Name`` or ``path/to/file.py:Name`` names (``Name`` may be
+    dotted: ``Outer.Inner``). A file is loaded by path, once per process. QuadnavError when
+    the module or file is not there or lacks the name; :class:`PluginError` with the user
+    code's traceback when loading it raised."""
+    where, _, name = target.partition(":")
+    module = _load_file(where, kind) if where.endswith(".py") else _import(where, kind)
+    found: Any = module
+    for part in name.split("."):
+        if not hasattr(found, part):
+            defined = sorted(n for n, v in vars(module).items()
+                             if not n.startswith("_") and getattr(v, "__module__", None)
+                             == module.__name__)
+            raise QuadnavError(f"{kind} {target}: {where} has no {name!r}"
+                               + (f" (it defines {', '.join(defined)})" if defined else ""))
+        found = getattr(found, part)
+    return found
+
+
+def _import(name: str, kind: str) -> ModuleType:
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError as error:
+        if error.name is not None and name.startswith(error.name):
+            raise QuadnavError(f"{kind} {name}: no module named {error.name!r} (is it "
+                               "installed, or did you mean path/to/file.py?)") from None
+        raise _raised_while_loading(name, kind, error) from None
+    except Exception as error:
+        raise _raised_while_loading(name, kind, error) from None
+
+
+def _load_file(path: str, kind: str) -> ModuleType:
+    file = Path(path).expanduser().resolve()
+    if not file.is_file():
+        raise QuadnavError(f"{kind} {path}: no such file")
+    # One module per file, under a name unlikely to collide, kept in sys.modules so that
+    # the file's classes pickle and its own relative lookups work.
+    name = f"quadnav_plugin_{file.stem}_{hashlib.sha1(str(file).encode()).hexdigest()[:8]}"
+    if name in sys.modules:
+        return sys.modules[name]
+    loader_spec = importlib.util.spec_from_file_location(name, file)
+    if loader_spec is None or loader_spec.loader is None:
+        raise QuadnavError(f"{kind} {path}: not a Python file")
+    module = importlib.util.module_from_spec(loader_spec)
+    sys.modules[name] = module
+    try:
+        loader_spec.loader.exec_module(module)
+    except Exception as error:
+        del sys.modules[name]
+        raise _raised_while_loading(path, kind, error) from None
+    return module
+
+
+def _raised_while_loading(where: str, kind: str, error: Exception) -> PluginError:
+    return PluginError(f"{kind} {where}: {type(error).__name__} while loading it: {error}",
+                       details=user_traceback(error))
+
+
+def user_traceback(error: BaseException) -> str:
+    """The traceback of ``error`` without quadnav's own frames: what the plug-in's author
+    needs to see."""
+    frames = [frame for frame in traceback.extract_tb(error.__traceback__)
+              if not frame.filename.startswith("<frozen ")
+              and not Path(frame.filename).resolve().is_relative_to(_PACKAGE)]
+    lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames),
+             *traceback.format_exception_only(type(error), error)]
+    return "".join(lines).rstrip("\n")

@@ -85,8 +85,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser(argv).parse_args(argv)
         return args.handler(args)
     except QuadnavError as error:
+        details = getattr(error, "details", None)  # a plug-in's own traceback, once
+        if details:
+            print(details, file=sys.stderr)
         print(f"quadnav: error: {error}", file=sys.stderr)
-        return EXIT_USAGE
+        return getattr(error, "exit_code", EXIT_USAGE)
     except (KeyboardInterrupt, ImportError) as error:  # a stop during a lazy import too
         return report_stop(error)
 
