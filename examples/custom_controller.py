@@ -20,7 +20,7 @@ from numba import njit
 
 from quadnav.control.contract import SATURATED, Controller
 from quadnav.control.registry import CONTROLLERS
-from quadnav.control.se3 import SE3Gains, se3_gains, se3_step
+from quadnav.control.se3 import SE3GainArrays, SE3Gains, se3_gain_arrays, se3_step
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.world import load_world
@@ -29,7 +29,7 @@ INTEGRAL = 1  # memory slots 1-3: the integral of the position error, m s
 
 
 class IntegralGains(NamedTuple):
-    se3: SE3Gains
+    se3: SE3GainArrays
     ki: np.ndarray  # (3,) 1/s^3
     limit: float  # largest integral, m s
 
@@ -46,10 +46,12 @@ def se3_integral_step(memory, state, reference, g, v, dt):
     return commands
 
 
-def se3_integral(gains=None) -> Controller:
-    """The factory ``--controller`` names call: it ignores the cascade's gains."""
+def se3_integral(vehicle, gains=None) -> Controller:
+    """The factory ``--controller`` names call with the vehicle and the controller's own
+    gains: here always SE(3)'s defaults and this integral's."""
     return Controller("se3i", se3_integral_step,
-                      IntegralGains(se3_gains(), np.array([4.0, 4.0, 8.0]), 0.5), 4)
+                      IntegralGains(se3_gain_arrays(SE3Gains()), np.array([4.0, 4.0, 8.0]),
+                                    0.5), 4)
 
 
 CONTROLLERS.register("se3i", se3_integral)

@@ -26,13 +26,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import PPoly
 
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -96,7 +96,7 @@ class KinoFlight:
         trajectory: the plan as flown (:func:`plan_trajectory`).
         flight: the simulated flight.
         vehicle: the simulated quadrotor.
-        gains: the cascade's gains (used by the ``cascade`` controller).
+        gains: the controller's own gains (None for a controller without any).
         controller: the controller's registered name.
         settings: the simulation's settings.
     """
@@ -108,7 +108,7 @@ class KinoFlight:
     trajectory: Trajectory
     flight: Flight
     vehicle: VehicleParams
-    gains: Gains
+    gains: Any
     controller: str
     settings: SimSettings
 
@@ -166,7 +166,7 @@ class KinoFlight:
 
 def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
                   search: KinoSettings, vehicle: VehicleParams | None = None,
-                  gains: Gains | None = None, settings: SimSettings | None = None,
+                  gains: Any = None, settings: SimSettings | None = None,
                   controller: str = DEFAULT_CONTROLLER,
                   progress: Callable[[float], None] | None = None) -> KinoFlight:
     """Fly the solved plan ``result`` closed loop (see the module docstring).
@@ -178,7 +178,8 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         search: the planner's settings (recorded).
         vehicle: the simulated quadrotor (default: the ``tello`` preset, the 80 g vehicle
             the default model stands for).
-        gains: the cascade's gains (default: those tuned for the vehicle).
+        gains: the controller's own gains (default: those tuned for the vehicle,
+            :func:`~quadnav.control.registry.controller_gains`).
         settings: rates, goal tolerance, disturbances, seed (default: the defaults with
             the goal tolerance ``search.goal_radius``).
         controller: a name of :data:`~quadnav.control.registry.CONTROLLERS`.
@@ -190,7 +191,8 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
             (:func:`~quadnav.control.sampling.check_control_rate`).
     """
     vehicle = vehicle or load_params()
-    gains = gains or load_gains(preset=vehicle.gains)
+    if gains is None:
+        gains = controller_gains(controller, vehicle)
     settings = settings or SimSettings(goal_tolerance=search.goal_radius)
     trajectory = plan_trajectory(result, model)
     end = trajectory.position(trajectory.duration)
@@ -198,9 +200,10 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         raise QuadnavError(f"the plan ends at {format_point(end)}, not at the goal "
                            f"{'(none)' if world.goal is None else format_point(world.goal)} "
                            f"of {world.name}")
-    flown_by = CONTROLLERS.get(controller)(gains)
+    flown_by = make_controller(controller, vehicle, gains)
     check_control_rate(flown_by, vehicle, settings.control_rate)
-    flight = simulate(trajectory, vehicle, gains, world, settings, progress, controller=flown_by)
+    flight = simulate(trajectory, vehicle, world=world, settings=settings, progress=progress,
+                      controller=flown_by)
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,
                       controller, settings)
 

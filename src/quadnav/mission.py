@@ -15,14 +15,16 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
+from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
@@ -78,9 +80,13 @@ class MissionSettings:
             (:func:`~quadnav.sim.envelope.vehicle_limits`), lowered until every limit
             holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
-        gains: the cascade's gains (the PX4-style controller).
+        gains: the controller's own gains (the cascade's
+            :class:`~quadnav.control.gains.Gains`, SE(3)'s
+            :class:`~quadnav.control.se3.SE3Gains`); None: those tuned for ``vehicle``
+            (:func:`~quadnav.control.registry.controller_gains`), never another
+            vehicle's. A controller without gains of its own keeps None.
         controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
-            ``cascade``, ``se3`` or one registered).
+            ``cascade``, ``se3`` or one registered) or a plug-in spec.
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
@@ -96,14 +102,28 @@ class MissionSettings:
     trajectory: TrajectorySettings = field(default_factory=_default_trajectory)
     fastest: bool = False
     vehicle: VehicleParams = field(default_factory=load_params)
-    gains: Gains = field(default_factory=Gains)
+    gains: Any = None
     controller: str = DEFAULT_CONTROLLER
     sim: SimSettings = field(default_factory=SimSettings)
     plant: VehicleParams | None = None
 
     def __post_init__(self) -> None:
-        factory = CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
-        check_control_rate(factory(self.gains), self.flown_vehicle, self.sim.control_rate)
+        if self.gains is None:  # QuadnavError naming the choices for an unknown controller
+            object.__setattr__(self, "gains", controller_gains(self.controller, self.vehicle))
+        check_control_rate(self.flying_controller(), self.flown_vehicle, self.sim.control_rate)
+
+    def flying_controller(self) -> Controller:
+        """The controller, with its gains, for the vehicle as it knows it (``vehicle``)."""
+        return make_controller(self.controller, self.vehicle, self.gains)
+
+    @property
+    def limit_gains(self) -> Gains:
+        """The cascade gains whose saturations (thrust, tilt, rates, speed) bound what the
+        trajectory may ask (:func:`~quadnav.sim.envelope.vehicle_limits`): ``gains`` when
+        the cascade flies, else the cascade's tuned for ``vehicle``."""
+        if isinstance(self.gains, Gains):
+            return self.gains
+        return controller_gains(DEFAULT_CONTROLLER, self.vehicle)
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -327,12 +347,13 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     began = time.perf_counter()
     trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,
                                             SafeSpace(world, problem.margin),
-                                            settings.vehicle, settings.gains, settings.fastest)
+                                            settings.vehicle, settings.limit_gains,
+                                            settings.fastest)
     settings = dataclasses.replace(settings, trajectory=chosen)
     timings["trajectory"] = time.perf_counter() - began
-    flight = simulate(trajectory, settings.flown_vehicle, settings.gains, world, settings.sim,
-                      flight_progress, model=settings.vehicle,
-                      controller=CONTROLLERS.get(settings.controller)(settings.gains))
+    flight = simulate(trajectory, settings.flown_vehicle, world=world, settings=settings.sim,
+                      progress=flight_progress, model=settings.vehicle,
+                      controller=settings.flying_controller())
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
 

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.mission import flight_metrics, flight_succeeded
 from quadnav.sim.flight import Flight
@@ -78,7 +78,7 @@ class Tracking:
         world: the empty world it was flown in (:func:`track_world`).
         flight: the flight.
         vehicle: the simulated quadrotor.
-        gains: the cascade's gains.
+        gains: the controller's own gains (None for a controller without any).
         settings: the simulation settings flown with (a step's record rate raised to the
             control rate).
         controller: the controller's name (``cascade``, ``se3``, ...).
@@ -88,7 +88,7 @@ class Tracking:
     world: World
     flight: Flight
     vehicle: VehicleParams
-    gains: Gains
+    gains: Any
     settings: SimSettings
     controller: str = DEFAULT_CONTROLLER
 
@@ -168,7 +168,7 @@ def step_summary(metrics: dict) -> str:
 
 
 def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
-                    gains: Gains | None = None, settings: SimSettings | None = None,
+                    gains: Any = None, settings: SimSettings | None = None,
                     progress: Callable[[float], None] | None = None,
                     controller: str = DEFAULT_CONTROLLER) -> Tracking:
     """Fly ``reference`` in its :func:`track_world` and measure how well it was tracked.
@@ -177,11 +177,13 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
         reference: what to fly (e.g. from
             :func:`~quadnav.trajectory.references.load_reference`).
         vehicle: the simulated quadrotor (default: the ``tello`` preset).
-        gains: the controller (default: the gains tuned for the vehicle).
+        gains: the controller's own gains (default: those tuned for the vehicle,
+            :func:`~quadnav.control.registry.controller_gains`).
         settings: rates, settling time, goal tolerance, disturbances, seed; a step is
             recorded at the control rate whatever the record rate.
         progress: called with the fraction of the flight simulated.
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`).
+        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`)
+            or a plug-in spec.
 
     Raises:
         QuadnavError: a flight too long for the rates (see
@@ -189,12 +191,14 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
             the controller's gains (:func:`~quadnav.control.sampling.check_control_rate`).
     """
     vehicle = vehicle or load_params()
-    gains = gains or load_gains(preset=vehicle.gains)
+    if gains is None:
+        gains = controller_gains(controller, vehicle)
     settings = settings or SimSettings()
     if isinstance(reference, StepReference) and reference.is_step:
         settings = settings.replace(record_rate=settings.control_rate)
     world = track_world(reference)
-    flown_by = CONTROLLERS.get(controller)(gains)
+    flown_by = make_controller(controller, vehicle, gains)
     check_control_rate(flown_by, vehicle, settings.control_rate)
-    flight = simulate(reference, vehicle, gains, world, settings, progress, controller=flown_by)
+    flight = simulate(reference, vehicle, world=world, settings=settings, progress=progress,
+                      controller=flown_by)
     return Tracking(reference, world, flight, vehicle, gains, settings, controller)

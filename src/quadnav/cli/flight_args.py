@@ -8,9 +8,8 @@ from __future__ import annotations
 import argparse
 
 from quadnav.cli.args import number_in
-from quadnav.control.gains import Gains, course_gain_names, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
-from quadnav.errors import QuadnavError
+from quadnav.control.gains import course_gain_names
+from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER, controller_gains
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
@@ -37,27 +36,26 @@ def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
                              f"(default: {DEFAULT_PRESET})")
     parser.add_argument("--gains", metavar="NAME|FILE",
-                        help="controller gains: a TOML file, or a course gain table ("
-                             f"{', '.join(course_gain_names())}); keys it leaves out keep "
-                             "the gains tuned for the vehicle")
+                        help="the controller's gains: a TOML file of its keys, or a course "
+                             f"gain table of the cascade ({', '.join(course_gain_names())}); "
+                             "keys it leaves out keep the controller's gains tuned for the "
+                             "vehicle")
 
 
 def add_controller_argument(parser: argparse.ArgumentParser) -> None:
     """--controller NAME."""
     parser.add_argument("--controller", choices=CONTROLLERS.names(), default=DEFAULT_CONTROLLER,
-                        help="the controller: cascade (PX4-style, tuned by --gains) or se3 "
-                             "(the geometric controller of Lee et al., rotorpy's gains) "
-                             f"(default: {DEFAULT_CONTROLLER})")
+                        help="the controller: cascade (PX4-style) or se3 (the geometric "
+                             "controller of Lee et al., rotorpy's gains), each tuned by "
+                             f"--gains (default: {DEFAULT_CONTROLLER})")
 
 
-def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:
-    """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here)."""
-    controller = getattr(args, "controller", DEFAULT_CONTROLLER)
-    if args.gains is not None and controller != DEFAULT_CONTROLLER:
-        raise QuadnavError(f"--gains sets the cascade's gains; --controller {controller} "
-                           "flies with its own")
+def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, object]:
+    """The vehicle and the controller's gains of :func:`add_vehicle_arguments` (files are
+    read here)."""
     vehicle = load_params(args.params)
-    return vehicle, load_gains(args.gains, vehicle.gains)
+    controller = getattr(args, "controller", DEFAULT_CONTROLLER)
+    return vehicle, controller_gains(controller, vehicle, args.gains)
 
 
 def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:

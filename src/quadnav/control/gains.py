@@ -25,12 +25,17 @@ import dataclasses
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain, from_table, frozen_vector, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
+
+C = TypeVar("C")
+#: Where the cascade's gain sets are shipped (:func:`shipped`).
+CASCADE_SETS = "presets"
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,43 +138,63 @@ class Gains:
 
 
 def gain_preset_names() -> list[str]:
-    """Names of the shipped gain sets: ``tello`` (the defaults) and one per vehicle preset
-    that needs its own."""
-    return sorted(["tello", *_toml_names(_shipped() / "presets")])
+    """Names of the cascade's shipped gain sets: ``tello`` (the defaults) and one per
+    vehicle preset that needs its own."""
+    return sorted(["tello", *toml_names(CASCADE_SETS)])
 
 
 def course_gain_names() -> list[str]:
     """Names of the shipped course gain tables (``p2a-starter``, ``p2a-ankx22``, ...): the
     18 position and velocity gains of the WPI RBE595 starter and of published student teams,
     each file stating its source; usable wherever a gains file is (``--gains NAME``)."""
-    return sorted(_toml_names(_shipped() / "course"))
+    return sorted(toml_names("course"))
 
 
-def _shipped():
-    return resources.files("quadnav.control")
+def shipped(folder: str):
+    """The folder ``folder`` (e.g. ``presets``) of the files shipped in quadnav.control."""
+    return resources.files("quadnav.control").joinpath(*folder.split("/"))
 
 
-def _toml_names(folder) -> list[str]:
-    return [p.name.removesuffix(".toml") for p in folder.iterdir() if p.name.endswith(".toml")]
+def toml_names(folder: str) -> list[str]:
+    """The names of the TOML files shipped in ``folder`` (:func:`shipped`; none if it is
+    not there)."""
+    files = shipped(folder)
+    if not files.is_dir():
+        return []
+    return [p.name.removesuffix(".toml") for p in files.iterdir() if p.name.endswith(".toml")]
 
 
-def _set_from(gains: Gains, file, where: str) -> Gains:
-    with resources.as_file(file) as real:
-        return from_table(gains, read_toml(real), where)
+def shipped_table(folder: str, name: str) -> dict:
+    """The table of the shipped TOML file ``folder/name.toml``."""
+    with resources.as_file(shipped(folder) / f"{name}.toml") as real:
+        return read_toml(real)
+
+
+def gain_table(source: str | Path) -> tuple[dict, str]:
+    """The keys a gains source sets, and how messages name it: a course gain table by name
+    (:func:`course_gain_names`) or a TOML file."""
+    if str(source) in course_gain_names():
+        return shipped_table("course", str(source)), f"gain table {source}"
+    return read_toml(source), str(source)
+
+
+def gain_set(defaults: C, folder: str, name: str) -> C:
+    """A controller's ``defaults`` (a config dataclass) with its shipped gain set
+    ``folder/name.toml`` set on top, or the defaults alone when it ships no set of that
+    name."""
+    if name not in toml_names(folder):
+        return defaults
+    return from_table(defaults, shipped_table(folder, name), f"gain set {name}")
 
 
 def load_gains(path: str | Path | None = None, preset: str = "tello") -> Gains:
-    """The gain set ``preset`` (see :func:`gain_preset_names`), with the keys of ``path``
-    (if any) set on top: a course gain table's name (:func:`course_gain_names`) or a TOML
-    file."""
+    """The cascade's gain set ``preset`` (see :func:`gain_preset_names`), with the keys of
+    ``path`` (if any) set on top: a course gain table's name (:func:`course_gain_names`) or
+    a TOML file."""
     if preset not in gain_preset_names():
         raise QuadnavError(f"unknown gain set {preset!r}; expected one of "
                            f"{', '.join(gain_preset_names())}")
-    gains = Gains()
-    if preset != "tello":
-        gains = _set_from(gains, _shipped() / "presets" / f"{preset}.toml", f"gain set {preset}")
+    gains = gain_set(Gains(), CASCADE_SETS, preset)
     if path is None:
         return gains
-    if str(path) in course_gain_names():
-        return _set_from(gains, _shipped() / "course" / f"{path}.toml", f"gain table {path}")
-    return from_table(gains, read_toml(path), str(path))
+    return from_table(gains, *gain_table(path))

@@ -37,7 +37,7 @@ import numpy as np
 
 from quadnav.control.cascade import GainArrays
 from quadnav.control.contract import Controller
-from quadnav.control.se3 import SE3Gains
+from quadnav.control.se3 import SE3GainArrays
 from quadnav.errors import ControlWarning, QuadnavError
 from quadnav.limits import RATE
 from quadnav.vehicle.params import VehicleParams
@@ -69,7 +69,7 @@ def axis_loops(controller: Controller) -> list[AxisLoop] | None:
     if isinstance(g, GainArrays):
         return [AxisLoop(float(g.attitude_kp[b]), *(float(g.rate[k, b]) for k in range(3)),
                          float(g.derivative_cutoff)) for b in range(3)]
-    if isinstance(g, SE3Gains):
+    if isinstance(g, SE3GainArrays):
         return [AxisLoop(float(g.kr[b] / g.kw[b]), float(g.kw[b]), 0.0, 0.0, math.inf)
                 for b in range(3)]
     return None

@@ -15,18 +15,27 @@ One step:
    cannot make the wrench; motor commands in [0, 1].
 
 It has no integral terms, so a steady force it does not model (wind) leaves an offset.
-The default gains are rotorpy's for the Crazyflie, which in these units suit any small
-quadrotor whose motors respond within a few hundredths of a second.
+The default gains (:class:`SE3Gains`) are rotorpy's for the Crazyflie, which in these units
+suit any small quadrotor whose motors respond within a few hundredths of a second; a TOML
+file sets any of them (``--gains FILE``)::
+
+    kx = [6.5, 6.5, 15.0]      # position, 1/s^2
+    kv = [4.0, 4.0, 9.0]       # velocity, 1/s
+    kr = [544.0, 544.0, 100.0] # attitude, 1/s^2
+    kw = [46.64, 46.64, 20.0]  # body rate, 1/s
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from quadnav.arrays import FloatArray
+from quadnav.config import require, vector_field
 from quadnav.control.contract import SATURATED, Controller
 from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
@@ -37,8 +46,30 @@ from quadnav.vehicle.rotors import mix
 MEMORY_SIZE = 1
 
 
-class SE3Gains(NamedTuple):
-    """Gains per axis (3,): position 1/s^2, velocity 1/s, attitude 1/s^2, rate 1/s."""
+@dataclass(frozen=True, eq=False)
+class SE3Gains:
+    """The geometric controller's gains, per axis (3,), each >= 0 (defaults: rotorpy's
+    ``SE3Control``, with a gentler yaw).
+
+    Attributes:
+        kx: position, 1/s^2 (world axes).
+        kv: velocity, 1/s (world axes).
+        kr: attitude, 1/s^2 (body axes).
+        kw: body rate, 1/s (body axes).
+    """
+
+    kx: FloatArray = vector_field(6.5, 6.5, 15.0)
+    kv: FloatArray = vector_field(4.0, 4.0, 9.0)
+    kr: FloatArray = vector_field(544.0, 544.0, 100.0)
+    kw: FloatArray = vector_field(46.64, 46.64, 20.0)
+
+    def __post_init__(self) -> None:
+        require([(bool(np.all(getattr(self, k) >= 0)), f"{k} must be >= 0, got "
+                  f"{getattr(self, k).tolist()}") for k in ("kx", "kv", "kr", "kw")])
+
+
+class SE3GainArrays(NamedTuple):
+    """:class:`SE3Gains` as compiled code takes them: (3,) arrays."""
 
     kx: np.ndarray
     kv: np.ndarray
@@ -46,20 +77,20 @@ class SE3Gains(NamedTuple):
     kw: np.ndarray
 
 
-def se3_gains(kx=(6.5, 6.5, 15.0), kv=(4.0, 4.0, 9.0), kr=(544.0, 544.0, 100.0),
-              kw=(46.64, 46.64, 20.0)) -> SE3Gains:
-    """The gains as compiled code takes them (defaults: rotorpy's ``SE3Control``, with a
-    gentler yaw)."""
-    return SE3Gains(*(np.array(k, dtype=np.float64) for k in (kx, kv, kr, kw)))
+def se3_gain_arrays(gains: SE3Gains) -> SE3GainArrays:
+    """The compiled-code form of ``gains``."""
+    return SE3GainArrays(*(np.array(k, dtype=np.float64) for k in (
+        gains.kx, gains.kv, gains.kr, gains.kw)))
 
 
 def se3_controller(gains: SE3Gains | None = None) -> Controller:
-    """The geometric controller as a :class:`~quadnav.control.contract.Controller`."""
-    return Controller("se3", se3_step, gains or se3_gains(), MEMORY_SIZE)
+    """The geometric controller with ``gains`` (default: :class:`SE3Gains`) as a
+    :class:`~quadnav.control.contract.Controller`."""
+    return Controller("se3", se3_step, se3_gain_arrays(gains or SE3Gains()), MEMORY_SIZE)
 
 
 @njit(cache=True)
-def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE3Gains,
+def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE3GainArrays,
              v: VehicleArrays, dt: float) -> np.ndarray:
     """Motor commands (4,) in [0, 1] for the measured ``state`` (17,) tracking
     ``reference`` (11,); see the module docstring."""

@@ -1,0 +1,93 @@
+"""Controllers own their gains: a controller's factory takes the vehicle and its own gains,
+a vehicle names the gain set each controller flies it with, ``--gains`` sets the gains of
+whichever controller flies (SE(3)'s too), and the library never flies a vehicle with another
+vehicle's gains."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from clitools import assert_user_error, run_here
+
+from quadnav.config import as_plain
+from quadnav.control.gains import Gains, load_gains
+from quadnav.control.registry import (
+    CONTROLLERS,
+    controller_gains,
+    gain_set_names,
+    make_controller,
+)
+from quadnav.control.sampling import axis_loops
+from quadnav.control.se3 import SE3Gains
+from quadnav.errors import QuadnavError
+from quadnav.mission import MissionSettings
+from quadnav.tracking import track_reference
+from quadnav.trajectory.references import load_reference
+from quadnav.vehicle.params import load_params
+
+TELLO = load_params("tello")
+RBE595 = load_params("rbe595")
+
+
+def test_the_library_flies_a_vehicle_with_its_own_gains():
+    # on main, MissionSettings(vehicle=rbe595) kept the Tello's gains, which the rbe595
+    # vehicle (100 times the inertia) cannot fly well, where the command line loaded its own
+    settings = MissionSettings(vehicle=RBE595)
+
+    assert as_plain(settings.gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(settings.gains) != as_plain(Gains())
+    assert as_plain(MissionSettings().gains) == as_plain(Gains())  # the Tello's are the defaults
+    # and so do the other entries of the library: a tracking and its parameters
+    tracking = track_reference(load_reference("hover:duration=0.5"), RBE595)
+    assert tracking.parameters()["gains"] == as_plain(load_gains(preset="rbe595"))
+
+
+def test_each_controller_builds_from_the_vehicle_and_its_own_gains():
+    for name in CONTROLLERS.names():
+        own = controller_gains(name, RBE595)
+        assert make_controller(name, RBE595).gains.__class__ is make_controller(
+            name, RBE595, own).gains.__class__
+    assert isinstance(controller_gains("cascade", TELLO), Gains)
+    assert isinstance(controller_gains("se3", TELLO), SE3Gains)
+    assert "rbe595" in gain_set_names() and "tello" in gain_set_names()
+    with pytest.raises(QuadnavError, match="expected gains of type SE3Gains, got Gains"):
+        MissionSettings(controller="se3", gains=Gains())
+    with pytest.raises(QuadnavError, match="names the gain set 'nope'"):
+        MissionSettings(vehicle=TELLO.replace(gains="nope"))
+
+
+def test_se3_gains_are_read_from_a_toml_file_over_the_vehicles_own(tmp_path):
+    path = tmp_path / "se3.toml"
+    path.write_text("kr = [300.0, 300.0, 80.0]\nkw = [30.0, 30.0, 16.0]\n")
+
+    gains = controller_gains("se3", TELLO, path)
+
+    assert gains.kr.tolist() == [300.0, 300.0, 80.0] and gains.kx.tolist() == [6.5, 6.5, 15.0]
+    roll = axis_loops(make_controller("se3", TELLO, gains))[0]
+    assert (roll.attitude, roll.rate_p) == (10.0, 30.0)  # kR / kw and kw, as flown
+    path.write_text("kr = [300.0, 300.0]\n")
+    with pytest.raises(QuadnavError, match=f"{path}: kr: expected a list of 3 numbers"):
+        controller_gains("se3", TELLO, path)
+    with pytest.raises(QuadnavError, match="gain table p2a-starter: unknown key 'position'; "
+                                           "expected one of kx, kv, kr, kw"):
+        controller_gains("se3", TELLO, "p2a-starter")
+
+
+def test_fly_and_track_take_gains_for_the_se3_controller(tmp_path):
+    # on main: "--gains sets the cascade's gains; --controller se3 flies with its own"
+    gains = tmp_path / "se3.toml"
+    gains.write_text("kx = [5.0, 5.0, 12.0]\n")
+
+    result = run_here("track", "hover:duration=1", "--controller", "se3", "--gains", gains,
+                      "--no-figures", "-o", tmp_path / "hover")
+
+    assert result.returncode == 0, result.stderr
+    flown = json.loads((tmp_path / "hover" / "parameters.json").read_text())["gains"]
+    assert flown == as_plain(SE3Gains(kx=np.array([5.0, 5.0, 12.0])))
+    gains.write_text("[position]\nkp = [1.0, 1.0, 1.0]\n")
+    assert_user_error(run_here("fly", "--controller", "se3", "--gains", gains,
+                               "-o", tmp_path / "x"),
+                      f"{gains}: unknown key 'position'; expected one of kx, kv, kr, kw")
+    assert not (tmp_path / "x").exists()
