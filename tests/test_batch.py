@@ -54,7 +54,7 @@ maps = ["forest:seed=1", {map = "maps/m.txt", start_goal = "sg.txt", margin = 0.
 """)
     spec = read_spec(path)
 
-    assert spec.seeds == (0, 5) and spec.speeds == (1.0, None)
+    assert spec.seeds == (0, 5) and spec.speeds == (1.0, "max")
     assert spec.fixed.accel == 2.5 and spec.fixed.improve == 50_000
     assert spec.spreads[1] == Spread(mass=0.1, thrust=0.0, drag=0.2)
     assert spec.spreads[1].label == "mass=0.1,thrust=0,drag=0.2"
@@ -67,6 +67,13 @@ maps = ["forest:seed=1", {map = "maps/m.txt", start_goal = "sg.txt", margin = 0.
     assert [m.seed for m in missions[:3]] == [0, 5, 0]  # the seed varies fastest
     assert len({m.key for m in missions}) == len(missions)
     assert parse_spec(spec.table(), "/elsewhere") == spec  # batch.json reads back the same
+
+
+def test_mission_keys_stay_those_of_earlier_batch_folders():
+    # a batch folder written before speeds became one type ("max") resumes: same keys
+    spec = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max", 2.0]}, ".")
+    assert [(m.speed, m.key) for m in spec.missions()] == [
+        ("max", "ab5f7820b3a2679d"), (2.0, "d82baf8f1adb65ac")]
 
 
 @pytest.mark.parametrize(("text", "message"), [

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 from quadnav.errors import QuadnavError
 
@@ -105,6 +106,10 @@ LENGTH = Range(1e-3, 1e4, "m")
 # ------------------------------------------------------------------ trajectories
 #: A trajectory's top speed, m/s.
 SPEED = Range(0.01, 100.0, "m/s")
+#: The top speed ``max``: as fast as the vehicle can follow on the path.
+MAX_SPEED = "max"
+#: A mission's top speed: m/s in :data:`SPEED`, or :data:`MAX_SPEED`.
+Speed = float | Literal["max"]
 #: A trajectory's largest acceleration, m/s^2.
 ACCELERATION = Range(0.01, 1000.0, "m/s^2")
 #: Sample interval of written trajectories, s.
@@ -140,6 +145,20 @@ HEADING_RADIANS = Range(-2 * math.pi, 2 * math.pi, "rad")
 UNIT_INTERVAL = Range(0.0, 1.0)
 #: Emulated (or drone) seconds per wall-clock second of a Tello flight.
 TIME_SCALE = Range(0.01, 100.0)
+
+
+def speed_value(value: object) -> Speed | None:
+    """``value`` as a mission's top speed (:data:`Speed`): a number in :data:`SPEED`, or
+    ``max`` in any case; None when it is neither (the one rule of every command, mission
+    file and batch spec)."""
+    if isinstance(value, str):
+        return MAX_SPEED if value.strip().lower() == MAX_SPEED else None
+    return float(value) if value in SPEED else None
+
+
+def speed_text(speed: Speed) -> str:
+    """``speed`` as a flag gives it: ``2``, ``0.5`` or ``max``."""
+    return speed if speed == MAX_SPEED else f"{speed:g}"
 
 
 def check_duration(duration: float, advice: str, at_least: bool = False) -> None:

@@ -312,7 +312,8 @@ def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | 
         world: the real map.
         start: (3,) m, or None for the map's own.
         goal: (3,) m, or None for the map's own.
-        margin: safety margin, m (None: the map's own, else 0.2).
+        margin: safety margin, m (None: the map's own, else 0.2:
+            :meth:`~quadnav.world.World.margin_for`).
         settings: see :class:`MissionSettings`.
         planning_progress: called with (fraction of the budget, best length m).
         flight_progress: called with the fraction of the flight simulated.
@@ -321,11 +322,9 @@ def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | 
         QuadnavError: a bad query (a start in a block, a goal outside the map, a start
             and goal provably disconnected).
     """
-    if margin is None:
-        margin = world.margin if world.margin is not None else 0.2
     settings = settings or MissionSettings()
-    return fly_problem(make_problem(world, start, goal, margin, settings.body), settings,
-                       planning_progress, flight_progress)
+    return fly_problem(make_problem(world, start, goal, world.margin_for(margin), settings.body),
+                       settings, planning_progress, flight_progress)
 
 
 def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = None,

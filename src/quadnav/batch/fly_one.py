@@ -21,6 +21,7 @@ from quadnav.batch.table import mission_row
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
 from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.limits import MAX_SPEED
 from quadnav.mission import Mission, MissionSettings, fly_problem
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
 from quadnav.sim.settings import SimSettings, default_record_rate
@@ -114,8 +115,9 @@ def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSett
         planning=PlannerSettings(time_limit=fixed.time_cap, improve_iterations=fixed.improve,
                                  seed=mission.seed),
         trajectory=TrajectorySettings(method=fixed.method, timing=fixed.timing,
-                                      v_max=mission.speed or DEFAULT_V_MAX, a_max=fixed.accel),
-        fastest=mission.speed is None,
+                                      v_max=DEFAULT_V_MAX if mission.speed == MAX_SPEED
+                                      else mission.speed, a_max=fixed.accel),
+        fastest=mission.speed == MAX_SPEED,
         vehicle=vehicle,
         gains=context.gains[mission.gains],
         sim=SimSettings(physics_rate=fixed.physics_rate, control_rate=fixed.control_rate,
@@ -128,11 +130,8 @@ def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSett
 def mission_margin(context: BatchContext, mission: MissionSpec) -> float:
     """The mission's margin, m: its map entry's, else the batch's, else the map's own,
     else 0.2."""
-    world = context.worlds[mission.map.map]
-    for margin in (mission.map.margin, context.fixed.margin, world.margin):
-        if margin is not None:
-            return margin
-    return DEFAULT_MARGIN
+    given = context.fixed.margin if mission.map.margin is None else mission.map.margin
+    return context.worlds[mission.map.map].margin_for(given)
 
 
 def given_query(context: BatchContext, mission: MissionSpec

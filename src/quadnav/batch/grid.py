@@ -42,6 +42,7 @@ from quadnav.limits import (
     FORCE,
     GUSTS,
     MARGIN,
+    MAX_SPEED,
     PLAN_ITERATIONS,
     PLAN_TIME,
     RATE,
@@ -49,7 +50,9 @@ from quadnav.limits import (
     SETTLE,
     SPEED,
     Range,
+    Speed,
     format_number,
+    speed_value,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
 from quadnav.planning import get_planner
@@ -155,7 +158,7 @@ class MissionSpec:
     Attributes:
         map: the map and its query.
         seed: seed of the planner, the gusts, the spread factors and a drawn start/goal.
-        speed: top speed, m/s (None: as fast as the vehicle can follow, ``max``).
+        speed: top speed, m/s, or ``"max"``: as fast as the vehicle can follow.
         wind: (3,) steady force, N, world frame.
         gusts: gust standard deviation per axis, N.
         spread: the vehicle spread.
@@ -165,7 +168,7 @@ class MissionSpec:
 
     map: MapEntry
     seed: int
-    speed: float | None
+    speed: Speed
     wind: tuple[float, float, float]
     gusts: float
     spread: Spread
@@ -175,7 +178,8 @@ class MissionSpec:
     @property
     def key(self) -> str:
         """A short stable name of the mission: a hash of its grid values."""
-        values = json.dumps([self.map.__dict__, self.seed, self.speed, self.wind, self.gusts,
+        speed = None if self.speed == MAX_SPEED else self.speed  # as keys were made before
+        values = json.dumps([self.map.__dict__, self.seed, speed, self.wind, self.gusts,
                              self.spread.__dict__, self.planner, self.gains],
                             sort_keys=True)
         return hashlib.sha256(values.encode()).hexdigest()[:16]
@@ -187,7 +191,7 @@ class BatchSpec:
 
     maps: tuple[MapEntry, ...]
     seeds: tuple[int, ...]
-    speeds: tuple[float | None, ...]
+    speeds: tuple[Speed, ...]
     winds: tuple[tuple[float, float, float], ...]
     gusts: tuple[float, ...]
     spreads: tuple[Spread, ...]
@@ -218,7 +222,7 @@ class BatchSpec:
                 for entry in self.maps]
         return {
             "maps": maps, "seeds": list(self.seeds),
-            "speeds": ["max" if v is None else v for v in self.speeds],
+            "speeds": list(self.speeds),
             "winds": [list(w) for w in self.winds], "gusts": list(self.gusts),
             "spreads": [s.__dict__ for s in self.spreads], "planners": list(self.planners),
             "gains": list(self.gains),
@@ -321,12 +325,11 @@ def _seeds(value: Any, src: _Source) -> tuple[int, ...]:
     return tuple(range(int(count)))
 
 
-def _speed(value: Any, src: _Source) -> float | None:
-    if isinstance(value, str) and value.strip().lower() == "max":
-        return None
-    if not _is_number(value) or value not in SPEED:
+def _speed(value: Any, src: _Source) -> Speed:
+    speed = speed_value(value)
+    if speed is None:
         raise src.error("speeds", f"expected {SPEED.describe()} or \"max\", got {value!r}")
-    return float(value)
+    return speed
 
 
 def _wind(value: Any, src: _Source) -> tuple[float, float, float]:

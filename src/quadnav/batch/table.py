@@ -30,6 +30,7 @@ import numpy as np
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
+from quadnav.limits import MAX_SPEED
 
 if TYPE_CHECKING:
     from quadnav.batch.grid import MissionSpec
@@ -90,9 +91,10 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
     spread = mission.spread
     row |= {
         "mission_key": mission.key, "map": mission.map.map, "seed": mission.seed,
-        "speed": mission.speed, "gusts": mission.gusts, "spread": spread.label,
-        "spread_mass": spread.mass, "spread_thrust": spread.thrust, "spread_drag": spread.drag,
-        "planner": mission.planner, "gains": mission.gains, "start_goal_drawn": drawn,
+        "speed": None if mission.speed == MAX_SPEED else mission.speed,  # empty: max
+        "gusts": mission.gusts, "spread": spread.label, "spread_mass": spread.mass,
+        "spread_thrust": spread.thrust, "spread_drag": spread.drag, "planner": mission.planner,
+        "gains": mission.gains, "start_goal_drawn": drawn,
     }
     row |= {f"wind_{a}": w for a, w in zip(AXES, mission.wind, strict=True)}
     row |= dict(zip(("mass_factor", "thrust_factor", "drag_factor"), factors, strict=True))

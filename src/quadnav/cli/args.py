@@ -21,6 +21,8 @@ from quadnav.limits import (
     SPEED,
     TIME_SCALE,
     Range,
+    Speed,
+    speed_value,
 )
 from quadnav.planning import PlannerSettings, planner_names
 from quadnav.world import World, read_start_goal
@@ -71,16 +73,17 @@ heading_degrees = number_in(HEADING_DEGREES)
 time_scale = number_in(TIME_SCALE)
 
 
-def speed_or_max(text: str) -> float | None:
-    """argparse type of ``--speed V|max``: a top speed in :data:`SPEED`, or ``None`` for
-    ``max`` (as fast as the vehicle can follow)."""
-    if text.strip().lower() == "max":
-        return None
+def speed_or_max(text: str) -> Speed:
+    """argparse type of ``--speed V|max``: a top speed in :data:`SPEED`, or ``"max"`` (as
+    fast as the vehicle can follow; :func:`~quadnav.limits.speed_value`)."""
     try:
-        return speed(text)
-    except argparse.ArgumentTypeError:
+        value = speed_value(float(text))
+    except ValueError:
+        value = speed_value(text)
+    if value is None:
         raise argparse.ArgumentTypeError(f"expected {SPEED.describe()} or max, got "
-                                         f"{text[:40]!r}") from None
+                                         f"{text[:40]!r}")
+    return value
 
 
 def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
@@ -118,10 +121,9 @@ def add_start_goal_arguments(parser: argparse.ArgumentParser, file: bool = True)
 
 
 def resolve_margin(args: argparse.Namespace, world: World) -> float:
-    """The margin flag, else the map's own margin, else DEFAULT_MARGIN."""
-    if args.margin is not None:
-        return args.margin
-    return world.margin if world.margin is not None else DEFAULT_MARGIN
+    """The margin flag, else the map's own margin, else DEFAULT_MARGIN
+    (:meth:`~quadnav.world.World.margin_for`)."""
+    return world.margin_for(args.margin)
 
 
 def resolve_start_goal(args: argparse.Namespace, world: World

@@ -58,8 +58,7 @@ def batch_spec(args: argparse.Namespace) -> BatchSpec:
              if getattr(args, key) is not None}
     table = {"maps": [{"map": name} | query for name in inputs],
              "seeds": DEFAULT_SEEDS if args.seeds is None else args.seeds,
-             "speeds": [DEFAULT_SPEED] if args.speeds is None else
-             ["max" if v is None else v for v in args.speeds],
+             "speeds": [DEFAULT_SPEED] if args.speeds is None else args.speeds,
              "vehicle": args.params or DEFAULT_PRESET,
              "planners": [args.planner or "rrtstar"]}
     optional = {"accel": args.accel, "margin": args.margin,

@@ -36,7 +36,7 @@ from quadnav.cli.flight_lines import (
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
-from quadnav.limits import ACCELERATION, SPEED
+from quadnav.limits import ACCELERATION, MAX_SPEED, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
     DEFAULT_IMPROVE,
@@ -65,8 +65,9 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
         planner=args.planner,
         planning=planner_budget(args),
         trajectory=TrajectorySettings(method=args.method, timing=args.timing,
-                                      v_max=args.speed or DEFAULT_SPEED, a_max=args.accel),
-        fastest=args.speed is None,
+                                      v_max=DEFAULT_SPEED if args.speed == MAX_SPEED
+                                      else args.speed, a_max=args.accel),
+        fastest=args.speed == MAX_SPEED,
         vehicle=vehicle,
         gains=gains,
         controller=args.controller,

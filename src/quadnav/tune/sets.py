@@ -32,6 +32,7 @@ from quadnav.batch.grid import BatchSpec, MissionSpec, parse_spec
 from quadnav.config import read_toml
 from quadnav.control.gains import Gains
 from quadnav.errors import PlanningWarning, QuadnavError
+from quadnav.limits import speed_text
 from quadnav.mission import fly_problem
 from quadnav.sim.settings import SimSettings
 from quadnav.tracking import track_world
@@ -157,7 +158,7 @@ def mission_item(context: BatchContext, mission: MissionSpec) -> TuneItem:
         warnings.simplefilter("ignore", PlanningWarning)
         settings = mission_settings(context, mission)
         flown = fly_problem(mission_problem(context, mission, settings.body), settings)
-    label = (f"{mission.map.map} {'max' if mission.speed is None else f'{mission.speed:g}'} "
+    label = (f"{mission.map.map} {speed_text(mission.speed)} "
              f"m/s{_disturbance(mission.wind, mission.gusts)}, seed {mission.seed}")
     if flown.trajectory is None:
         raise QuadnavError(f"{label}: no path to fly ({flown.plan.message})")

@@ -27,6 +27,9 @@ ESTIMATE_POINTS = 100_000
 ESTIMATE_SEED = 7919
 #: Colour given to blocks whose map file names none (RGB in [0, 1]).
 DEFAULT_BLOCK_COLOR = (0.6, 0.6, 0.6)
+#: Safety margin, metres, of a query on a map without a margin of its own; the margin
+#: built-in worlds recommend and are proven flyable with.
+DEFAULT_MARGIN = 0.2
 
 
 def _frozen(values: ArrayLike, shape: tuple[int, ...], what: str,
@@ -175,6 +178,13 @@ class World:
     def replace(self, **changes: object) -> World:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""
         return dataclasses.replace(self, **changes)
+
+    def margin_for(self, given: float | None = None) -> float:
+        """The safety margin a query on this map keeps, m: ``given``, else the map's own,
+        else :data:`DEFAULT_MARGIN` (the one rule of every command and the library)."""
+        if given is not None:
+            return given
+        return self.margin if self.margin is not None else DEFAULT_MARGIN
 
     def inflate(self, margin: float) -> World:
         """A new World whose blocks grow and whose boundary shrinks by ``margin`` metres.

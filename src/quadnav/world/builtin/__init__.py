@@ -29,7 +29,7 @@ from quadnav.specs import (
 from quadnav.world.builtin import empty, forest, maze, window
 from quadnav.world.builtin.base import Generator, Layout
 from quadnav.world.connectivity import connected, default_resolution
-from quadnav.world.model import World
+from quadnav.world.model import DEFAULT_MARGIN, World
 
 __all__ = [
     "DEFAULT_MARGIN",
@@ -42,8 +42,6 @@ __all__ = [
     "world_names",
 ]
 
-#: Safety margin, metres, that built-in worlds recommend and are proven flyable with.
-DEFAULT_MARGIN = 0.2
 #: The world flown or shown when no MAP is given.
 DEFAULT_WORLD_SPEC = "forest"
 #: Layouts drawn for one spec before giving up on finding a connected one.
