@@ -96,6 +96,9 @@ MAX_WAYPOINTS = 100_000
 PLAN_TIME = Range(0.0, 3600.0, "s", above_low=True)
 #: Samples of a path search (RRT*'s tree never holds more vertices than this).
 PLAN_ITERATIONS = Range(1, 5_000_000, whole=True)
+#: Samples of a search's budget (--iterations, --improve): 0 (for --iterations: no cap
+#: of its own) or a number.
+SAMPLES = Range(0, PLAN_ITERATIONS.high, whole=True)
 #: Extensions of a kinodynamic search.
 KINO_ITERATIONS = Range(1, 1_000_000, whole=True)
 #: Random seeds.
@@ -110,6 +113,8 @@ SPEED = Range(0.01, 100.0, "m/s")
 MAX_SPEED = "max"
 #: A mission's top speed: m/s in :data:`SPEED`, or :data:`MAX_SPEED`.
 Speed = float | Literal["max"]
+#: A vehicle spread: the largest fraction by which mass, thrust or drag may differ.
+SPREAD = Range(0.0, 0.9)
 #: A trajectory's largest acceleration, m/s^2.
 ACCELERATION = Range(0.01, 1000.0, "m/s^2")
 #: Sample interval of written trajectories, s.

@@ -94,6 +94,8 @@ class MissionSettings:
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
             its model, unaware of the difference.
+        reference: a plain-Python reference (a plug-in spec, its text) flown instead of the
+            trajectory made through the path; None: that trajectory.
     """
 
     planner: str = "rrtstar"
@@ -106,6 +108,7 @@ class MissionSettings:
     controller: str = DEFAULT_CONTROLLER
     sim: SimSettings = field(default_factory=SimSettings)
     plant: VehicleParams | None = None
+    reference: str | None = None
 
     def __post_init__(self) -> None:
         if self.gains is None:  # QuadnavError naming the choices for an unknown controller

@@ -17,6 +17,7 @@ from quadnav.limits import (
     MARGIN,
     PLAN_ITERATIONS,
     PLAN_TIME,
+    SAMPLES,
     SEED,
     SPEED,
     TIME_SCALE,
@@ -25,8 +26,9 @@ from quadnav.limits import (
     speed_value,
 )
 from quadnav.planning import PlannerSettings, planner_names
-from quadnav.world import World, read_start_goal
+from quadnav.world import World
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
+from quadnav.world.startgoal import query_ends
 
 
 def number_in(allowed: Range) -> Callable[[str], float]:
@@ -57,9 +59,6 @@ def probability(text: str) -> float:
     return value
 
 
-#: --iterations and --improve of a path search: 0 (for --iterations: no cap of its own)
-#: or a number of samples.
-SAMPLES = Range(0, PLAN_ITERATIONS.high, whole=True)
 #: argparse types of the numbers several commands take.
 coordinate = number_in(COORDINATE)
 margin_value = number_in(MARGIN)
@@ -86,13 +85,15 @@ def speed_or_max(text: str) -> Speed:
     return value
 
 
-def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False) -> None:
+def add_map_argument(parser: argparse.ArgumentParser, optional: bool = False,
+                     unset: bool = False) -> None:
     """MAP: a map file, a built-in world spec or a course map (optional: defaults to the
-    built-in world)."""
+    built-in world; with ``unset``, left None for the command to fill in)."""
     help_text = ("map file (.txt or .json), built-in world spec (e.g. forest:seed=3) or "
                  "course map (e.g. course:rbe595/map1; quadnav maps list)")
     if optional:
-        parser.add_argument("map", nargs="?", default=DEFAULT_WORLD_SPEC, metavar="MAP",
+        parser.add_argument("map", nargs="?", default=None if unset else DEFAULT_WORLD_SPEC,
+                            metavar="MAP",
                             help=f"{help_text} (default: {DEFAULT_WORLD_SPEC})")
     else:
         parser.add_argument("map", metavar="MAP", help=help_text)
@@ -128,34 +129,33 @@ def resolve_margin(args: argparse.Namespace, world: World) -> float:
 
 def resolve_start_goal(args: argparse.Namespace, world: World
                        ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Start and goal from the flags, else the start/goal file, else the map."""
-    start, goal = world.start, world.goal
-    if args.start_goal is not None:
-        start, goal = read_start_goal(args.start_goal)
-    if args.start is not None:
-        start = np.array(args.start)
-    if args.goal is not None:
-        goal = np.array(args.goal)
-    return start, goal
+    """Start and goal from the flags, else the start/goal file, else the map
+    (:func:`~quadnav.world.startgoal.query_ends`)."""
+    return query_ends(world, args.start, args.goal, args.start_goal)
 
 
 
 def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iterations: int,
-                          improve: int | None) -> None:
+                          improve: int | None, unset: bool = False) -> None:
     """--planner NAME, --time S, --seed N, --iterations N and --improve N with the given
-    defaults (``iterations`` 0: no cap; ``improve`` None: no limit)."""
-    parser.add_argument("--planner", default="rrtstar", metavar="NAME",
+    defaults (``iterations`` 0: no cap; ``improve`` None: no limit); with ``unset``, the
+    flags not given are left None and the defaults only shown (the command's mission fills
+    them in)."""
+    def default(value):
+        return None if unset else value
+
+    parser.add_argument("--planner", default=default("rrtstar"), metavar="NAME",
                         help=f"one of {', '.join(planner_names())} (default: rrtstar)")
-    parser.add_argument("--time", type=plan_time, default=time, metavar="S",
+    parser.add_argument("--time", type=plan_time, default=default(time), metavar="S",
                         help=f"search time budget, {PLAN_TIME.describe()} (default: {time:g})")
-    add_seed_argument(parser, "random seed")
+    add_seed_argument(parser, "random seed", unset)
     budget = f"{iterations:,} samples" if iterations else "no cap"
-    parser.add_argument("--iterations", type=samples, default=iterations, metavar="N",
+    parser.add_argument("--iterations", type=samples, default=default(iterations), metavar="N",
                         help=f"stop after N samples in all, at most {PLAN_ITERATIONS.high:,}; "
                              f"0: no cap but {PLAN_ITERATIONS.high:,} (default: {budget})")
     until = (f"{improve:,} samples after it" if improve is not None
              else "until the time or iteration budget ends")
-    parser.add_argument("--improve", type=samples, default=improve, metavar="N",
+    parser.add_argument("--improve", type=samples, default=default(improve), metavar="N",
                         help="once a first path is found, improve it for N more samples, "
                              f"at most {PLAN_ITERATIONS.high:,}, then stop (rrtstar; the same "
                              "seed then gives the same path however fast the machine; "
@@ -168,9 +168,10 @@ def planner_budget(args: argparse.Namespace) -> PlannerSettings:
                            improve_iterations=args.improve, seed=args.seed)
 
 
-def add_seed_argument(parser: argparse.ArgumentParser, what: str) -> None:
-    """--seed N, 0 to 2^63 - 1 (default 0); ``what`` says what it seeds."""
-    parser.add_argument("--seed", type=seed_value, default=0, metavar="N",
+def add_seed_argument(parser: argparse.ArgumentParser, what: str, unset: bool = False) -> None:
+    """--seed N, 0 to 2^63 - 1 (default 0; with ``unset``, None when not given); ``what``
+    says what it seeds."""
+    parser.add_argument("--seed", type=seed_value, default=None if unset else 0, metavar="N",
                         help=f"{what}, 0 to 2^63 - 1; the same seed gives the same result "
                              "(default: 0)")
 

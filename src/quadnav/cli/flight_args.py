@@ -16,23 +16,31 @@ from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
 
 
-def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
-    """--method and --timing: the trajectory's shape and how its segments are timed."""
-    parser.add_argument("--method", choices=METHODS.names(), default="minsnap",
+def _default(value: object, unset: bool) -> object:
+    """A flag's default: ``value``, or None with ``unset`` (the command's mission fills it
+    in, :mod:`quadnav.cli.mission_args`)."""
+    return None if unset else value
+
+
+def add_timing_arguments(parser: argparse.ArgumentParser, unset: bool = False) -> None:
+    """--method and --timing: the trajectory's shape and how its segments are timed (with
+    ``unset``, None when not given)."""
+    parser.add_argument("--method", choices=METHODS.names(), default=_default("minsnap", unset),
                         help="shape of the trajectory: minimum snap, the course reports' "
                              "quintic or cubic, the minimum-jerk quintic-c2, or the quintic "
                              "with average-velocity ends and times length / speed "
                              "(default: minsnap)")
-    parser.add_argument("--timing", choices=TIMINGS, default="fastest",
+    parser.add_argument("--timing", choices=TIMINGS, default=_default("fastest", unset),
                         help="segment times: fastest cruises at --speed and slows only for "
                              "turns and the ends; rest-to-rest gives each segment a "
                              "stop-and-go move; snap-time trades snap for time (minsnap) "
                              "(default: fastest)")
 
 
-def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
-    """--params NAME|FILE (the vehicle) and --gains FILE (the controller)."""
-    parser.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
+def add_vehicle_arguments(parser: argparse.ArgumentParser, unset: bool = False) -> None:
+    """--params NAME|FILE (the vehicle; with ``unset``, None when not given) and --gains
+    FILE (the controller)."""
+    parser.add_argument("--params", default=_default(DEFAULT_PRESET, unset), metavar="NAME|FILE",
                         help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
                              f"(default: {DEFAULT_PRESET})")
     parser.add_argument("--gains", metavar="NAME|FILE",
@@ -42,9 +50,10 @@ def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
                              "vehicle")
 
 
-def add_controller_argument(parser: argparse.ArgumentParser) -> None:
-    """--controller NAME."""
-    parser.add_argument("--controller", choices=CONTROLLERS.names(), default=DEFAULT_CONTROLLER,
+def add_controller_argument(parser: argparse.ArgumentParser, unset: bool = False) -> None:
+    """--controller NAME (with ``unset``, None when not given)."""
+    parser.add_argument("--controller", choices=CONTROLLERS.names(),
+                        default=_default(DEFAULT_CONTROLLER, unset),
                         help="the controller: cascade (PX4-style) or se3 (the geometric "
                              "controller of Lee et al., rotorpy's gains), each tuned by "
                              f"--gains (default: {DEFAULT_CONTROLLER})")
@@ -58,24 +67,30 @@ def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, object]:
     return vehicle, controller_gains(controller, vehicle, args.gains)
 
 
-def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
-    """--physics-rate, --control-rate, --wind FX FY FZ, --gusts N and --settle S."""
-    parser.add_argument("--physics-rate", type=number_in(RATE), default=SimSettings.physics_rate,
+def add_simulation_arguments(parser: argparse.ArgumentParser, unset: bool = False) -> None:
+    """--physics-rate, --control-rate, --wind FX FY FZ, --gusts N and --settle S (with
+    ``unset``, None when not given)."""
+    parser.add_argument("--physics-rate", type=number_in(RATE),
+                        default=_default(SimSettings.physics_rate, unset),
                         metavar="HZ", help=f"RK4 steps per second, {RATE.describe()} "
                                            f"(default: {SimSettings.physics_rate:g})")
-    parser.add_argument("--control-rate", type=number_in(RATE), default=SimSettings.control_rate,
+    parser.add_argument("--control-rate", type=number_in(RATE),
+                        default=_default(SimSettings.control_rate, unset),
                         metavar="HZ", help=f"controller updates per second, {RATE.describe()}; "
                                            "the physics rate must be a whole multiple "
                                            f"(default: {SimSettings.control_rate:g})")
-    parser.add_argument("--wind", nargs=3, type=number_in(FORCE), default=[0.0, 0.0, 0.0],
+    parser.add_argument("--wind", nargs=3, type=number_in(FORCE),
+                        default=_default([0.0, 0.0, 0.0], unset),
                         metavar=("FX", "FY", "FZ"),
                         help=f"steady wind as a force on the vehicle, world frame, each "
                              f"{FORCE.describe()} (default: none)")
-    parser.add_argument("--gusts", type=number_in(GUSTS), default=0.0, metavar="N",
+    parser.add_argument("--gusts", type=number_in(GUSTS), default=_default(0.0, unset),
+                        metavar="N",
                         help=f"random gusts: standard deviation of a force per axis, "
                              f"{GUSTS.describe()}, redrawn every "
                              f"{SimSettings.gust_period:g} s from the seed (default: 0)")
-    parser.add_argument("--settle", type=number_in(SETTLE), default=SimSettings.settle_time,
+    parser.add_argument("--settle", type=number_in(SETTLE),
+                        default=_default(SimSettings.settle_time, unset),
                         metavar="S", help=f"time flown after the reference ends, "
                                           f"{SETTLE.describe()} "
                                           f"(default: {SimSettings.settle_time:g})")

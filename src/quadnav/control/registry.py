@@ -97,10 +97,11 @@ def controller_factory(controller: str) -> ControllerFactory:
 
 
 def controller_gains(controller: str, vehicle: VehicleParams,
-                     source: str | Path | Mapping[str, Any] | None = None) -> Any:
+                     source: str | Path | Mapping[str, Any] | None = None,
+                     where: str = "gains") -> Any:
     """The gains ``controller`` flies ``vehicle`` with: those tuned for the vehicle, with the
     keys of ``source`` set on top (a course gain table's name, a gains TOML file, or a table
-    of keys); None for a controller without gains of its own.
+    of keys, named ``where`` in messages); None for a controller without gains of its own.
 
     Raises:
         QuadnavError: an unknown controller, a bad key or value (naming the file and key),
@@ -117,7 +118,7 @@ def controller_gains(controller: str, vehicle: VehicleParams,
     if source is None:
         return gains
     if isinstance(source, Mapping):
-        return from_table(gains, dict(source), "gains")
+        return from_table(gains, dict(source), where)
     return from_table(gains, *gain_table(source))
 
 

@@ -144,9 +144,16 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
     if not path.is_file():
         raise QuadnavError(f"{spec}: expected a vehicle preset ({', '.join(preset_names())}) "
                            "or a TOML file")
-    table = read_toml(path)
+    return params_from_table(read_toml(path), str(path), path.stem)
+
+
+def params_from_table(table: dict, where: str, name: str = "custom") -> VehicleParams:
+    """The vehicle a vehicle file's keys ``table`` describe: set on top of the preset its
+    ``based_on`` names (default ``tello``), called ``name`` unless the table names it;
+    ``where`` names the table in messages."""
+    table = dict(table)
     base = table.pop("based_on", DEFAULT_PRESET)
     if base not in preset_names():
-        raise QuadnavError(f"{path}: based_on must name a preset "
+        raise QuadnavError(f"{where}: based_on must name a preset "
                            f"({', '.join(preset_names())}), got {base!r}")
-    return from_table(load_params(base).replace(name=path.stem), table, str(path))
+    return from_table(load_params(base).replace(name=name), table, where)

@@ -10,9 +10,11 @@ import re
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from quadnav.errors import MapError
 from quadnav.world import courses
+from quadnav.world.model import World
 from quadnav.world.reading import (
     check_coordinates,
     check_line_length,
@@ -59,3 +61,18 @@ def read_start_goal(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     else:
         data = read_file(path)
     return parse_start_goal(decode_text(data, str(path)), str(path))
+
+
+def query_ends(world: World, start: ArrayLike | None = None, goal: ArrayLike | None = None,
+               start_goal: str | Path | None = None
+               ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The start and goal of a query on ``world``, each (3,) m or None (none known): each
+    one given, else that of the start/goal file ``start_goal`` (a file or ``course:NAME``),
+    else the map's own (the one rule of every command and the library)."""
+    ends = [world.start, world.goal]
+    if start_goal is not None:
+        ends = list(read_start_goal(start_goal))
+    for k, given in enumerate((start, goal)):
+        if given is not None:
+            ends[k] = np.array(given, dtype=np.float64)
+    return ends[0], ends[1]
