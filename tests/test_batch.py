@@ -256,7 +256,7 @@ def test_a_spread_vehicle_flies_the_nominal_trajectory_with_the_nominal_controll
         assert spread[key] == nominal[key], key
     assert spread["rms_tracking_error_m"] != nominal["rms_tracking_error_m"]
     assert spread["success"] and nominal["success"]
-    heavy = MissionSpec(spec.maps[0], 4, 3.0, (0.0, 0.0, 0.0), 0.0, Spread(0.3, 0.3, 0.3),
+    heavy = MissionSpec(spec.maps[0], 4, 3.0, (0.0, 0.0, 0.0), 0.0, Spread(mass=0.3, thrust=0.3, drag=0.3),
                         "rrtstar", "default")
     assert same_row(fly_row(context, heavy), spread)  # the same factors from the seed
 

@@ -211,7 +211,7 @@ def test_a_misspelt_flag_points_to_its_commands_own_help(command, args, flag, tm
     (["batch", "--seeds", "2", "a.txt", "b.txt"], {"inputs": ["a.txt", "b.txt"], "seeds": 2}),
     (["report", "runs/a", "-o", "both.html", "runs/b"],
      {"folders": ["runs/a", "runs/b"], "output": "both.html"}),
-    (["refly", "batch", "-o", "again", "3"], {"batch": "batch", "mission": "3", "output": "again"}),
+    (["refly", "batch", "-o", "again", "3"], {"folder": "batch", "mission": "3", "output": "again"}),
     (["map", "check", "--margin", "0.3", "forest"], {"map": "forest", "margin": 0.3}),
 ])
 def test_positional_arguments_may_come_anywhere_among_the_flags(args, values):

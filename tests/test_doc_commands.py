@@ -6,7 +6,8 @@ shown with its output (``$ quadnav ...`` followed by lines) must give that outpu
 error or warning line word for word and number for number (each number to within a step
 of its last digit and a little more, as another CPU, BLAS build or numba target changes
 last digits), any other line with the same words (its numbers may differ, as planning
-runs against the clock); one shown without output must succeed. Lines
+runs against the clock); one shown without output must succeed. A code block whose first
+line is ``# file: NAME`` is a file the commands read, written into the folder first. Lines
 with placeholders (MAP, DIR, FILE, [optional parts], A|B) are synopses and are only read
 by the real parser (a Ray cluster's ``HEAD:6379`` is a placeholder too). The Blender
 command is only read too: tests/test_blender.py runs it as written (with both renders) on a
@@ -113,7 +114,19 @@ def _commands(page: Path) -> list[DocCommand]:
     return found
 
 
+#: A code block that is a file the page's commands read: its first line ``# file: NAME``
+#: (a comment of the file too), then the rest of the file.
+FILE_BLOCK = re.compile(r"^```\w*\n(# file: ([\w.-]+).*?\n.*?)^```", re.DOTALL | re.MULTILINE)
+
+
+def _files(page: Path) -> dict[str, str]:
+    """The files a page shows whole (:data:`FILE_BLOCK`), their text by name: written into
+    the page's folder before its commands run."""
+    return {match.group(2): match.group(1) for match in FILE_BLOCK.finditer(page.read_text())}
+
+
 PAGE_COMMANDS = {page.name: _commands(page) for page in PAGES}
+PAGE_FILES = {page.name: _files(page) for page in PAGES}
 RUNNABLE = {name: [c for c in commands if not c.is_synopsis]
             for name, commands in PAGE_COMMANDS.items()}
 #: Pages run, each once: a page whose command lines are those of an earlier page
@@ -226,6 +239,8 @@ def test_the_commands_of_a_page_run_as_written(page, tmp_path, monkeypatch, caps
     monkeypatch.setenv(CACHE_ENV, str(tmp_path / "course-cache"))
     monkeypatch.setenv(URL_ENV, course_maps_url or dead_url())
     (tmp_path / "work").mkdir()
+    for name, text in PAGE_FILES[page].items():
+        (tmp_path / "work" / name).write_text(text)
     monkeypatch.chdir(tmp_path / "work")
     skipped = []
     for command in commands:

@@ -8,6 +8,9 @@ Files (every number SI, world frame z up):
 ``metrics.json``   outcome and figures of merit (:meth:`Mission.metrics`,
                    :meth:`Tracking.metrics`)
 ``parameters.json`` every setting used (``parameters()`` of either)
+``mission.toml``   the mission flown, as a mission file (fly, refly: ``quadnav fly
+                   --mission`` and ``quadnav refly`` fly it again;
+                   :meth:`MissionConfig.flown`)
 ``map.json``       the map, with the start, goal and margin flown (JSON map format);
                    for a track, the empty world it was flown in
 ``tree.csv``       the explored tree: ``x,y,z,parent`` per vertex (parent -1: a root;
@@ -37,6 +40,7 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.mission import Mission
+from quadnav.missionconfig import MISSION_FILE, MissionConfig
 from quadnav.planning.report import path_csv
 from quadnav.planning.result import IntArray, tree_edges
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
@@ -61,9 +65,12 @@ VIEW_PAGE = "view.html"
 #: Tello flight whose true track was known).
 FLIGHT_FILES = ("path.csv", "trajectory.csv", "flight.csv", "truth.csv")
 #: Every file a run folder can hold.
-RUN_FILES = ("metrics.json", "parameters.json", "map.json", "tree.csv", *FLIGHT_FILES,
+RUN_FILES = ("metrics.json", "parameters.json", MISSION_FILE, "map.json", "tree.csv", *FLIGHT_FILES,
              *FIGURES, DRIFT_FIGURE, REPORT, VIEW_PAGE)
 TREE_HEADER = "x,y,z,parent"
+#: The comment at the top of a run folder's mission.toml.
+MISSION_COMMENT = ("The mission flown into this folder: quadnav fly --mission FILE flies it "
+                   "again\n(quadnav refly DIR too), and another key or flag changes it.")
 #: truth.csv: flight.csv's time, s, and the true position, m.
 TRUTH_HEADER = "t,x,y,z"
 
@@ -100,6 +107,7 @@ class RunContent:
         flight: the flight (simulated, or a real one's :class:`FlightTable`), or None.
         truth: (K, 4) the true track of a real one's flight (t s as the flight's, x, y,
             z m), or None when not known.
+        mission: the text of mission.toml, or None when the run is not a mission's.
     """
 
     world: World
@@ -110,11 +118,13 @@ class RunContent:
     reference: Reference | None
     flight: Flight | FlightTable | None
     truth: FloatArray | None = None
+    mission: str | None = None
 
 
-def run_content(run: Mission | Tracking) -> RunContent:
+def run_content(run: Mission | Tracking, config: MissionConfig | None = None) -> RunContent:
     """The content of the run folder of a mission (``quadnav fly``) or a tracking
-    (``quadnav track``: no tree, no path)."""
+    (``quadnav track``: no tree, no path); with the ``config`` the mission was built from,
+    its mission.toml (:meth:`MissionConfig.flown`)."""
     if isinstance(run, Tracking):
         return RunContent(run.world, run.metrics(), run.parameters(), None, None,
                           run.reference, run.flight)
@@ -123,7 +133,8 @@ def run_content(run: Mission | Tracking) -> RunContent:
     return RunContent(
         problem.world.replace(start=problem.start, goal=problem.goal, margin=problem.margin),
         run.metrics(), run.parameters(), (plan.tree_nodes, plan.tree_parents),
-        plan.path if flown else None, run.trajectory if flown else None, run.flight)
+        plan.path if flown else None, run.trajectory if flown else None, run.flight,
+        mission=None if config is None else config.flown(run).toml(MISSION_COMMENT))
 
 
 def write_run_files(content: RunContent, folder: Path) -> list[str]:
@@ -132,8 +143,10 @@ def write_run_files(content: RunContent, folder: Path) -> list[str]:
     texts = {
         "metrics.json": _json(content.metrics),
         "parameters.json": _json(content.parameters),
+        MISSION_FILE: content.mission,
         "map.json": format_map(content.world, "map.json"),
     }
+    texts = {name: text for name, text in texts.items() if text is not None}
     if content.tree is not None:
         texts["tree.csv"] = csv_table(np.column_stack(content.tree), TREE_HEADER)
     if content.path is not None:

@@ -1,11 +1,13 @@
 """One mission of a batch: :func:`fly_row` flies a :class:`~.grid.MissionSpec` and returns
 its row of the results table.
 
-Everything a mission reads from files (maps, gains, the vehicle) is loaded once by the
-parent into a :class:`BatchContext` (:func:`load_context`) and sent to the workers, so a
-worker on another machine needs no file of the driver's. A mission depends only on its
-spec and the context: the planner's budget binds by samples, and the gusts, the vehicle
-spread and a start and goal drawn for a map without its own all come from the seed.
+Each mission is a :class:`~quadnav.missionconfig.MissionConfig` (:func:`mission_config`),
+built as every command builds one. Everything a mission reads from files (maps, gains,
+the vehicle) is loaded once by the parent into a :class:`BatchContext`
+(:func:`load_context`) and sent to the workers, so a worker on another machine needs no
+file of the driver's. A mission depends only on its spec and the context: the planner's
+budget binds by samples, and the gusts, the vehicle spread and a start and goal drawn for
+a map without its own all come from the seed.
 """
 
 from __future__ import annotations
@@ -13,21 +15,20 @@ from __future__ import annotations
 import hashlib
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from quadnav.batch.grid import DEFAULT_GAINS, BatchSpec, FixedSettings, MissionSpec
 from quadnav.batch.table import mission_row
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, load_gains
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains
 from quadnav.errors import PlanningWarning, QuadnavError
-from quadnav.limits import MAX_SPEED
 from quadnav.mission import Mission, MissionSettings, fly_problem
+from quadnav.missionconfig import MissionConfig, MissionFiles, spread_factors, vehicle_from
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
-from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.timing import DEFAULT_V_MAX
-from quadnav.vehicle.params import VehicleParams, load_params
+from quadnav.vehicle.params import VehicleParams
 from quadnav.world import World, load_world
 from quadnav.world.builtin import DEFAULT_MARGIN
 
@@ -36,8 +37,9 @@ from quadnav.world.builtin import DEFAULT_MARGIN
 DRAWN_POINTS = 32
 #: Pairs of drawn points tried, most distant first, before the mission is refused.
 DRAWN_TRIES = 8
-#: Streams of the seed's random numbers, so each draw is independent of the others.
-SPREAD_STREAM, QUERY_STREAM = 1, 2
+#: The seed's stream of the drawn start and goal (the spread's is
+#: :data:`~quadnav.missionconfig.SPREAD_STREAM`).
+QUERY_STREAM = 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,7 +56,7 @@ class BatchContext:
     fixed: FixedSettings
     vehicle: VehicleParams
     worlds: dict[str, World]
-    gains: dict[str, Gains]
+    gains: dict[str, Any]
 
     def fingerprint(self) -> dict:
         """What the files gave, JSON-ready: the vehicle, the gains and a hash of each map,
@@ -62,6 +64,10 @@ class BatchContext:
         return {"vehicle": as_plain(self.vehicle),
                 "gains": {name: as_plain(gains) for name, gains in self.gains.items()},
                 "maps": {name: _world_hash(world) for name, world in self.worlds.items()}}
+
+    def files(self, mission: MissionSpec) -> MissionFiles:
+        """The vehicle and gains ``mission`` flies with, as loaded."""
+        return MissionFiles(self.vehicle, self.gains[mission.gains])
 
 
 def _world_hash(world: World) -> str:
@@ -74,9 +80,10 @@ def _world_hash(world: World) -> str:
 def load_context(spec: BatchSpec) -> BatchContext:
     """Load the vehicle, maps and gains of ``spec``; QuadnavError for a bad file or a
     setting out of range, before any mission flies."""
-    vehicle = load_params(spec.fixed.vehicle)
+    vehicle = vehicle_from(spec.fixed.vehicle)
     worlds = {entry.map: load_world(entry.map) for entry in spec.maps}
-    gains = {name: load_gains(None if name == DEFAULT_GAINS else name, vehicle.gains)
+    gains = {name: controller_gains(DEFAULT_CONTROLLER, vehicle,
+                                    None if name == DEFAULT_GAINS else name)
              for name in spec.gains}
     context = BatchContext(spec.fixed, vehicle, worlds, gains)
     for mission in spec.missions()[:1]:  # every mission's settings are checked alike
@@ -84,64 +91,53 @@ def load_context(spec: BatchSpec) -> BatchContext:
     return context
 
 
-def spread_factors(mission: MissionSpec) -> tuple[float, float, float]:
-    """The factors (mass, thrust coefficient, drag) of the mission's flown vehicle, each
-    uniform in [1 - f, 1 + f] for its spread fraction f, drawn from the mission's seed."""
-    rng = np.random.default_rng([mission.seed, SPREAD_STREAM])
-    draws = rng.uniform(-1.0, 1.0, 3)
-    spread = mission.spread
-    mass, thrust, drag = (1.0 + f * u for f, u in zip(
-        (spread.mass, spread.thrust, spread.drag), draws, strict=True))
-    return float(mass), float(thrust), float(drag)
+def mission_config(fixed: FixedSettings, mission: MissionSpec) -> MissionConfig:
+    """The mission ``mission`` of a batch whose fixed settings are ``fixed``: its map
+    entry's query (its margin, else the batch's), its seed, speed, disturbances, planner
+    and gains, and the batch's vehicle, trajectory, budget and rates."""
+    entry = mission.map
+    query = {"start": entry.start, "goal": entry.goal,
+             "margin": fixed.margin if entry.margin is None else entry.margin}
+    gains = None if mission.gains == DEFAULT_GAINS else mission.gains
+    return MissionConfig.from_table({
+        "map": entry.map, "seed": mission.seed, "vehicle": fixed.vehicle,
+        "query": {key: value for key, value in query.items() if value is not None},
+        "planner": {"name": mission.planner, "time": fixed.time_cap,
+                    "improve": fixed.improve},
+        "trajectory": {"method": fixed.method, "timing": fixed.timing,
+                       "speed": mission.speed, "accel": fixed.accel},
+        "controller": {} if gains is None else {"gains": gains},
+        "simulation": {"physics_rate": fixed.physics_rate,
+                       "control_rate": fixed.control_rate, "settle": fixed.settle},
+        "disturbances": {"wind": mission.wind, "gusts": mission.gusts,
+                         "spread": mission.spread},
+    }, source="the batch spec")
 
 
 def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSettings:
-    """The settings ``mission`` flies with: the batch's fixed settings and the mission's
-    grid values; the plant is the nominal vehicle scaled by :func:`spread_factors`.
+    """The settings ``mission`` flies with (:meth:`MissionConfig.settings` of its
+    :func:`mission_config`, with the context's vehicle and gains); the plant is the
+    nominal vehicle scaled by :func:`~quadnav.missionconfig.spread_factors`.
 
     Raises:
         QuadnavError: settings that do not fit together (e.g. a physics rate that is not a
             multiple of the control rate, a spread vehicle that cannot lift itself).
     """
-    fixed, vehicle = context.fixed, context.vehicle
-    mass, thrust, drag = spread_factors(mission)
-    plant = None
-    if (mass, thrust, drag) != (1.0, 1.0, 1.0):
-        plant = vehicle.replace(mass=vehicle.mass * mass,
-                                thrust_coefficient=vehicle.thrust_coefficient * thrust,
-                                drag=vehicle.drag * drag)
-    return MissionSettings(
-        planner=mission.planner,
-        planning=PlannerSettings(time_limit=fixed.time_cap, improve_iterations=fixed.improve,
-                                 seed=mission.seed),
-        trajectory=TrajectorySettings(method=fixed.method, timing=fixed.timing,
-                                      v_max=DEFAULT_V_MAX if mission.speed == MAX_SPEED
-                                      else mission.speed, a_max=fixed.accel),
-        fastest=mission.speed == MAX_SPEED,
-        vehicle=vehicle,
-        gains=context.gains[mission.gains],
-        sim=SimSettings(physics_rate=fixed.physics_rate, control_rate=fixed.control_rate,
-                        record_rate=default_record_rate(fixed.control_rate),
-                        settle_time=fixed.settle, wind=mission.wind, gust_std=mission.gusts,
-                        seed=mission.seed),
-        plant=plant)
+    return mission_config(context.fixed, mission).settings(context.files(mission))
 
 
 def mission_margin(context: BatchContext, mission: MissionSpec) -> float:
     """The mission's margin, m: its map entry's, else the batch's, else the map's own,
     else 0.2."""
-    given = context.fixed.margin if mission.map.margin is None else mission.map.margin
-    return context.worlds[mission.map.map].margin_for(given)
+    config = mission_config(context.fixed, mission)
+    return config.margin(context.worlds[mission.map.map])
 
 
 def given_query(context: BatchContext, mission: MissionSpec
                 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """The start and goal given for the mission (its map entry's, else the map's own),
     each (3,) m or None when there is none, to be drawn from the seed."""
-    world = context.worlds[mission.map.map]
-    start = world.start if mission.map.start is None else np.array(mission.map.start)
-    goal = world.goal if mission.map.goal is None else np.array(mission.map.goal)
-    return start, goal
+    return mission_config(context.fixed, mission).ends(context.worlds[mission.map.map])
 
 
 def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarray
@@ -154,11 +150,12 @@ def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarra
     Raises:
         QuadnavError: a bad query (a given point in a block, disconnected ends).
     """
+    config = mission_config(context.fixed, mission)
     world = context.worlds[mission.map.map]
-    margin = mission_margin(context, mission)
-    start, goal = given_query(context, mission)
+    margin = config.margin(world)
+    start, goal = config.ends(world)
     if start is not None and goal is not None:
-        return make_problem(world, start, goal, margin, body)
+        return config.problem(world, body)
     rng = np.random.default_rng([mission.seed, QUERY_STREAM])
     points = world.inflate(margin).sample_free(DRAWN_POINTS, rng)
     starts = points if start is None else start[None]
@@ -197,9 +194,13 @@ def fly_row(context: BatchContext, mission: MissionSpec) -> dict:
     try:
         flown = fly_mission_spec(context, mission)
     except QuadnavError as error:
-        return mission_row(mission, spread_factors(mission), drawn, None, str(error),
+        return mission_row(mission, _factors(mission), drawn, None, str(error),
                            start, goal, mission_margin(context, mission))
-    return mission_row(mission, spread_factors(mission), drawn, flown)
+    return mission_row(mission, _factors(mission), drawn, flown)
+
+
+def _factors(mission: MissionSpec) -> tuple[float, float, float]:
+    return spread_factors(mission.spread, mission.seed)
 
 
 def warm_up(context: BatchContext) -> None:

@@ -43,18 +43,20 @@ from quadnav.limits import (
     GUSTS,
     MARGIN,
     MAX_SPEED,
-    PLAN_ITERATIONS,
     PLAN_TIME,
     RATE,
+    SAMPLES,
     SEED,
     SETTLE,
     SPEED,
+    SPREAD,
     Range,
     Speed,
     format_number,
     speed_value,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
+from quadnav.missionconfig import SPREAD_PARTS, Spread
 from quadnav.planning import get_planner
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import METHODS, TIMINGS
@@ -68,14 +70,10 @@ from quadnav.world.courses import MAP, is_course_name, read_course_file
 DEFAULT_TIME_CAP = 60.0
 #: The most missions one batch may hold.
 MAX_MISSIONS = 1_000_000
-#: A vehicle spread: the largest fraction by which mass, thrust or drag may differ.
-SPREAD = Range(0.0, 0.9)
 #: Seeds a batch may draw (``seeds = N`` for seeds 0 to N - 1).
 SEED_COUNT = Range(1, MAX_MISSIONS, whole=True)
 #: The gains of the vehicle, as a ``gains`` entry.
 DEFAULT_GAINS = "default"
-#: The vehicle parameters a spread scales, in the order the factors are drawn.
-SPREAD_PARTS = ("mass", "thrust", "drag")
 
 #: Keys of the grid, each a list of values.
 GRID_KEYS = ("maps", "seeds", "speeds", "winds", "gusts", "spreads", "planners", "gains")
@@ -132,23 +130,6 @@ class MapEntry:
     start: tuple[float, float, float] | None = None
     goal: tuple[float, float, float] | None = None
     margin: float | None = None
-
-
-@dataclass(frozen=True)
-class Spread:
-    """How far the flown vehicle may differ from the nominal one: mass, thrust coefficient
-    and drag are each scaled by a factor drawn uniformly in [1 - f, 1 + f] per mission."""
-
-    mass: float = 0.0
-    thrust: float = 0.0
-    drag: float = 0.0
-
-    @property
-    def label(self) -> str:
-        """``0.1`` when the three fractions agree, else ``mass=0.1,thrust=0.05,drag=0.2``."""
-        if self.mass == self.thrust == self.drag:
-            return f"{self.mass:g}"
-        return ",".join(f"{part}={getattr(self, part):g}" for part in SPREAD_PARTS)
 
 
 @dataclass(frozen=True)
@@ -348,8 +329,7 @@ def _spread(value: Any, src: _Source) -> Spread:
                 raise src.error(part, f"unknown key in a spread; expected one of "
                                       f"{', '.join(SPREAD_PARTS)}")
         return Spread(**{part: _number(f, SPREAD, "spreads", src) for part, f in value.items()})
-    fraction = _number(value, SPREAD, "spreads", src)
-    return Spread(fraction, fraction, fraction)
+    return Spread(**dict.fromkeys(SPREAD_PARTS, _number(value, SPREAD, "spreads", src)))
 
 
 def _planner(value: Any, src: _Source) -> str:
@@ -444,7 +424,7 @@ def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
     """The fixed settings of ``table``, defaults for those it leaves out."""
     base = FixedSettings()
     checks = {"accel": ACCELERATION, "margin": MARGIN, "settle": SETTLE,
-              "improve": Range(0, PLAN_ITERATIONS.high, whole=True), "time_cap": PLAN_TIME,
+              "improve": SAMPLES, "time_cap": PLAN_TIME,
               "physics_rate": RATE, "control_rate": RATE}
     values = {key: _number(table[key], allowed, key, src)
               for key, allowed in checks.items() if key in table}

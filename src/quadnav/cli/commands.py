@@ -38,7 +38,8 @@ COMMANDS: dict[str, Command] = {
     "batch": Command("batch_command", "add_batch_command",
                      "fly many missions (maps x seeds x speeds ...) into a table and summary"),
     "refly": Command("refly_command", "add_refly_command",
-                     "fly one mission of a batch again, with figures"),
+                     "fly a run folder's mission, or one mission of a batch, again, with "
+                     "figures"),
     "tune": Command("tune_command", "add_tune_command",
                     "tune the controller's gains by an Optuna search (needs quadnav[tune])"),
     "animate": Command("animate_command", "add_animate_command",

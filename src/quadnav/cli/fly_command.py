@@ -12,9 +12,6 @@ from quadnav.cli.args import (
     add_planner_arguments,
     add_run_output_arguments,
     add_start_goal_arguments,
-    planner_budget,
-    resolve_margin,
-    resolve_start_goal,
     speed_or_max,
 )
 from quadnav.cli.commands import command_help
@@ -24,8 +21,6 @@ from quadnav.cli.flight_args import (
     add_strict_argument,
     add_timing_arguments,
     add_vehicle_arguments,
-    simulation_settings,
-    vehicle_and_gains,
 )
 from quadnav.cli.flight_lines import (
     flight_failed,
@@ -34,68 +29,47 @@ from quadnav.cli.flight_lines import (
     tracking_errors,
     warn_margin_shortfall,
 )
+from quadnav.cli.mission_args import add_mission_argument, mission_config
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
-from quadnav.limits import ACCELERATION, MAX_SPEED, SPEED
+from quadnav.limits import ACCELERATION, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
     DEFAULT_IMPROVE,
     DEFAULT_SPEED,
     DEFAULT_TIME_CAP,
     Mission,
-    MissionSettings,
     fly_problem,
 )
-from quadnav.planning import get_planner, make_problem
+from quadnav.missionconfig import MissionConfig
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.flight import Ending, Flight
-from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.world import load_world
 
 #: Exit code of a flight that collided, missed the goal or found no path.
 EXIT_FAILED = 1
 
 
-def mission_settings(args: argparse.Namespace) -> MissionSettings:
-    """Mission settings from the command-line flags (files are read here)."""
-    vehicle, gains = vehicle_and_gains(args)
-    return MissionSettings(
-        planner=args.planner,
-        planning=planner_budget(args),
-        trajectory=TrajectorySettings(method=args.method, timing=args.timing,
-                                      v_max=DEFAULT_SPEED if args.speed == MAX_SPEED
-                                      else args.speed, a_max=args.accel),
-        fastest=args.speed == MAX_SPEED,
-        vehicle=vehicle,
-        gains=gains,
-        controller=args.controller,
-        sim=simulation_settings(args),
-    )
-
-
 def fly(args: argparse.Namespace) -> int:
     """Run the mission, write the outputs; exit 1 unless it reached the goal cleanly."""
-    get_planner(args.planner)
+    config = mission_config(args)
     folder = check_output_folder(args.output)
-    settings = mission_settings(args)
-    world = load_world(args.map)
-    start, goal = resolve_start_goal(args, world)
-    problem = make_problem(world, start, goal, resolve_margin(args, world), settings.body)
-    with planning_bar(f"plan ({args.planner})", args.quiet) as planning, \
+    settings = config.settings()
+    problem = config.problem(config.world(), settings.body)
+    with planning_bar(f"plan ({config.planner.name})", args.quiet) as planning, \
             fraction_bar("fly", args.quiet) as flying:
         mission = fly_problem(problem, settings, planning, flying)
-    return write_mission(mission, folder, figures=not args.no_figures, html=args.html,
+    return write_mission(mission, config, folder, figures=not args.no_figures, html=args.html,
                          strict=args.strict)
 
 
-def write_mission(mission: Mission, folder: Path, figures: bool, html: bool,
-                  strict: bool = False) -> int:
-    """Write the run folder of ``mission``, print its summary; returns the exit code: 0 when
-    it reached the goal cleanly (and, if ``strict``, kept the whole margin asked), else
-    :data:`EXIT_FAILED` (saying why on stderr)."""
-    written = write_run(mission, folder, figures=figures, html=html)
+def write_mission(mission: Mission, config: MissionConfig, folder: Path, figures: bool,
+                  html: bool, strict: bool = False) -> int:
+    """Write the run folder of ``mission`` (built from ``config``), print its summary;
+    returns the exit code: 0 when it reached the goal cleanly (and, if ``strict``, kept the
+    whole margin asked), else :data:`EXIT_FAILED` (saying why on stderr)."""
+    written = write_run(mission, folder, figures=figures, html=html, config=config)
     short = print_summary(mission)
     print("wrote " + ", ".join(str(folder / name) for name in written))
     failure = None if mission.success else failure_reason(mission)
@@ -160,7 +134,8 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "smooth it, make a trajectory (minimum snap by default) that cruises at "
                     "the top speed, and fly "
                     "it with a PX4-style cascaded controller on a simulated quadrotor. Writes "
-                    "DIR/metrics.json, DIR/parameters.json, DIR/map.json, DIR/tree.csv, "
+                    "DIR/metrics.json, DIR/parameters.json, DIR/mission.toml (the mission, "
+                    "which --mission flies again), DIR/map.json, DIR/tree.csv, "
                     "DIR/path.csv, DIR/trajectory.csv, DIR/flight.csv and the figures "
                     f"{', '.join(FIGURES)} and the report {REPORT}. Exit 0 when the vehicle "
                     "reaches the goal (within the goal tolerance of the point flown to) "
@@ -168,22 +143,24 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                     "1 on a collision, hitting the floor, the body leaving the map, a missed "
                     "goal or no path (metrics.json is still written), and with --strict when "
                     "the flight kept less margin than asked; 2 on bad input.")
-    add_map_argument(p, optional=True)
+    add_map_argument(p, optional=True, unset=True)
+    add_mission_argument(p)
     add_start_goal_arguments(p)
     add_margin_argument(p)
-    p.add_argument("--speed", type=speed_or_max, default=DEFAULT_SPEED, metavar="V|max",
+    p.add_argument("--speed", type=speed_or_max, metavar="V|max",
                    help=f"top speed of the trajectory, {SPEED.describe()}: never exceeded, "
                         "cruised at wherever the turns allow; max: as fast as the vehicle "
                         f"can follow on the path (default: {DEFAULT_SPEED:g})")
-    p.add_argument("--accel", type=acceleration, default=DEFAULT_ACCELERATION, metavar="A",
+    p.add_argument("--accel", type=acceleration, metavar="A",
                    help=f"largest size of the acceleration vector, {ACCELERATION.describe()}"
                         ": one budget for speeding up, braking and turning (default: "
                         f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
-    add_timing_arguments(p)
-    add_vehicle_arguments(p)
-    add_controller_argument(p)
-    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
-    add_simulation_arguments(p)
+    add_timing_arguments(p, unset=True)
+    add_vehicle_arguments(p, unset=True)
+    add_controller_argument(p, unset=True)
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE,
+                          unset=True)
+    add_simulation_arguments(p, unset=True)
     add_strict_argument(p)
     add_run_output_arguments(p, "flight", REPORT)
     p.set_defaults(handler=fly)

@@ -24,11 +24,9 @@ from quadnav.cli.args import (
     add_start_goal_arguments,
     heading_degrees,
     number_in,
-    planner_budget,
-    resolve_margin,
-    resolve_start_goal,
     time_scale,
 )
+from quadnav.cli.mission_args import mission_config
 from quadnav.cli.progress import planning_bar
 from quadnav.errors import QuadnavError
 from quadnav.hardware.bridge import (
@@ -54,14 +52,12 @@ from quadnav.hardware.tello_log import LOG_NAME
 from quadnav.hardware.truth import TRUTH_FILE_HEADER, read_truth_file
 from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
-from quadnav.planning import get_planner
+from quadnav.missionconfig import MissionConfig, Trajectory
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.runs import RUN_FILES
-from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.pathfile import read_path_csv
 from quadnav.trajectory.sampled import read_reference_file
-from quadnav.world import load_world
 
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
 DEFAULT_SPEED = 0.5
@@ -125,24 +121,29 @@ def _saved_plan(args: argparse.Namespace) -> SavedPlan | None:
     return SavedPlan(reference.samples.position, args.trajectory, reference.motion)
 
 
+#: A Tello mission's defaults: :class:`MissionConfig`'s with a gentle indoor speed.
+TELLO_MISSION = MissionConfig(trajectory=Trajectory(speed=DEFAULT_SPEED,
+                                                    accel=DEFAULT_ACCELERATION))
+
+
 def tello_fly(args: argparse.Namespace) -> int:
     """Plan, check and fly (or print) the mission; the exit code says how it ended."""
-    get_planner(args.planner)
+    config = mission_config(args, TELLO_MISSION)
+    mission = config.settings()
     settings = BridgeSettings(mode=args.mode, min_battery=args.min_battery,
                               time_scale=args.time_scale)
     folder = check_output_folder(args.output)
     if args.truth is not None:
         read_truth_file(args.truth)  # a file that cannot be read is bad input: before flying
-    world = load_world(args.map)
+    world = config.world()
     saved = _saved_plan(args)
-    start, goal = (None, None) if saved is not None else resolve_start_goal(args, world)
+    start, goal = (None, None) if saved is not None else config.ends(world)
     try:
-        with planning_bar(f"plan ({args.planner})", args.quiet or saved is not None) as progress:
-            plan = plan_flight(
-                world, start, goal, resolve_margin(args, world), math.radians(args.yaw),
-                args.planner,
-                planner_budget(args),
-                TrajectorySettings(v_max=args.speed, a_max=args.accel), progress, saved)
+        with planning_bar(f"plan ({mission.planner})", args.quiet or saved is not None
+                          ) as progress:
+            plan = plan_flight(world, start, goal, config.margin(world), math.radians(args.yaw),
+                               mission.planner, mission.planning, mission.trajectory, progress,
+                               saved)
     except NoPathError as error:
         print(f"quadnav: tello: {error}", file=sys.stderr)
         return EXIT_FAILED
@@ -217,13 +218,14 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--yaw", type=heading_degrees, default=0.0, metavar="DEG",
                    help="map heading the drone faces on the floor, counter-clockwise from "
                         f"+x, {HEADING_DEGREES.describe()} (default: 0, facing +x)")
-    p.add_argument("--speed", type=tello_speed, default=DEFAULT_SPEED, metavar="V",
+    p.add_argument("--speed", type=tello_speed, metavar="V",
                    help=f"cruise speed, {TELLO_SPEED.describe()} (the Tello's go and rc "
                         f"limit; default: {DEFAULT_SPEED:g})")
-    p.add_argument("--accel", type=acceleration, default=DEFAULT_ACCELERATION, metavar="A",
+    p.add_argument("--accel", type=acceleration, metavar="A",
                    help=f"largest acceleration of the trajectory, {ACCELERATION.describe()} "
                         f"(default: {DEFAULT_ACCELERATION:g})")
-    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)
+    add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE,
+                          unset=True)
     p.add_argument("--dry-run", action="store_true",
                    help="print every command instead of sending it (needs no drone)")
     p.add_argument("--host", type=ipv4, default=TELLO_IP, metavar="IP",

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from quadnav.mission import Mission
+from quadnav.missionconfig import MissionConfig
 from quadnav.runfolder import replaced_folder
 from quadnav.runs import (
     REPORT,
@@ -20,10 +21,11 @@ from quadnav.tracking import Tracking
 
 
 def write_run(run: Mission | Tracking | RunContent, folder: str | Path, figures: bool = True,
-              html: bool = False) -> list[str]:
+              html: bool = False, config: MissionConfig | None = None) -> list[str]:
     """Write the run folder of ``run`` (a mission, a tracking or their
     :func:`run_content`; the folder is created if needed), whole or not at all
-    (:func:`~quadnav.runfolder.replaced_folder`); returns the names written.
+    (:func:`~quadnav.runfolder.replaced_folder`); returns the names written. A mission
+    built from ``config`` gets its mission.toml, which flies it again.
 
     The text files are written first; the new files are then read back once
     (:func:`read_run`) and, with ``figures``, the figures and the report are drawn from
@@ -32,7 +34,7 @@ def write_run(run: Mission | Tracking | RunContent, folder: str | Path, figures:
     one does not write are removed then, so the folder never mixes two runs; an interrupted
     or failed write leaves it as it was."""
     folder = Path(folder)
-    content = run if isinstance(run, RunContent) else run_content(run)
+    content = run if isinstance(run, RunContent) else run_content(run, config)
     with replaced_folder(folder, RUN_FILES) as staging:
         return _write_files(content, staging, folder, figures, html)
 

@@ -22,13 +22,15 @@ import optuna
 from quadnav.batch.executor import Executor, open_executor
 from quadnav.batch.fly_one import warm_up
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, load_gains
+from quadnav.control.gains import Gains
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains
 from quadnav.errors import PlanningWarning
+from quadnav.missionconfig import vehicle_from
 from quadnav.tune.evaluate import Flights, fly_item, objective, scores
 from quadnav.tune.sets import TuneItem, TuneSet, read_set, set_items
 from quadnav.tune.space import Knob, space_knobs, starting_point, with_values
 from quadnav.tune.study import StudySettings, open_study, run_study
-from quadnav.vehicle.params import VehicleParams, load_params
+from quadnav.vehicle.params import VehicleParams
 
 #: The name of the starting gains among the gain sets compared.
 OWN = "own"
@@ -94,14 +96,15 @@ class TuneRun:
 
     def __init__(self, settings: TuneSettings) -> None:
         self.settings = settings
-        self.vehicle: VehicleParams = load_params(settings.vehicle)
-        self.start: Gains = load_gains(settings.gains, self.vehicle.gains)
+        self.vehicle: VehicleParams = vehicle_from(settings.vehicle)
+        self.start: Gains = controller_gains(DEFAULT_CONTROLLER, self.vehicle, settings.gains)
         self.knobs: tuple[Knob, ...] = space_knobs(settings.space)
         self.sets: dict[str, TuneSet] = {
             "training": read_set(settings.training, settings.vehicle),
             "held-out": read_set(settings.held_out, settings.vehicle)}
         self.tables: dict[str, Gains] = {
-            name: load_gains(name, self.vehicle.gains) for name in settings.compare}
+            name: controller_gains(DEFAULT_CONTROLLER, self.vehicle, name)
+            for name in settings.compare}
         self.began = time.perf_counter()
 
     def plan(self) -> dict[str, list[TuneItem]]:
