@@ -585,12 +585,12 @@ class MissionConfig(Section):
         name when it is a preset, else by its values, and the gains by their values when
         they are not the vehicle's own."""
         settings, problem = mission.settings, mission.problem
-        vehicle: str | dict = as_plain(settings.vehicle)
-        if settings.vehicle.name in preset_names() and vehicle == as_plain(
+        vehicle: str | dict = _values(settings.vehicle)
+        if settings.vehicle.name in preset_names() and vehicle == _values(
                 load_params(settings.vehicle.name)):
             vehicle = settings.vehicle.name
         own = controller_gains(settings.controller, settings.vehicle)
-        gains = None if as_plain(settings.gains) == as_plain(own) else as_plain(settings.gains)
+        gains = None if _values(settings.gains) == _values(own) else _values(settings.gains)
         query = Query(start=tuple(problem.start), goal=tuple(problem.goal_asked),
                       margin=problem.margin)
         changes = {"map": os.path.abspath(self.map) if Path(self.map).is_file() else self.map,
@@ -617,6 +617,16 @@ class MissionConfig(Section):
             message = str(error)
             raise QuadnavError(message if message.startswith(where) else
                                f"{where}: {message}") from None
+
+
+def _values(config: Any) -> Any:
+    """A config dataclass as a TOML-ready table (:func:`~quadnav.config.as_plain`), its
+    keys that are None left out (TOML has no null; read back, they take their default)."""
+    def kept(value: Any) -> Any:
+        if isinstance(value, dict):
+            return {key: kept(item) for key, item in value.items() if item is not None}
+        return value
+    return kept(as_plain(config))
 
 
 def vehicle_from(vehicle: str | Mapping[str, Any], where: str = "vehicle") -> VehicleParams:
