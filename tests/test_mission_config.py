@@ -97,6 +97,23 @@ def test_a_bad_mission_file_is_one_line_naming_the_file_line_and_key(tmp_path, t
     assert not (tmp_path / "out").exists()
 
 
+def test_a_plug_in_file_beside_the_mission_file_is_found_from_any_folder(tmp_path):
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "ctl.py").write_text(
+        "from quadnav.control.se3 import se3_controller\n\n\n"
+        "def geometric(vehicle, gains=None):\n    return se3_controller()\n")
+    (tmp_path / "mine" / "m.toml").write_text(
+        f"map = '{SMALL}'\nplanner = {{improve = 500}}\n[controller]\nname = 'ctl.py:geometric'\n")
+    (tmp_path / "elsewhere").mkdir()
+
+    result = run_here("fly", "--mission", "../mine/m.toml", "--no-figures", "-o", "out",
+                      cwd=tmp_path / "elsewhere")
+
+    assert result.returncode == 0, result.stderr
+    kept = read_mission(tmp_path / "elsewhere" / "out" / MISSION_FILE)
+    assert kept.controller.name == f"{tmp_path / 'mine' / 'ctl.py'}:geometric"
+
+
 def test_the_flags_given_set_their_keys_on_top_of_a_mission_file(tmp_path):
     path = tmp_path / "m.toml"
     path.write_text("map = 'forest'\nseed = 2\n[query]\nstart = [1, 1, 1]\ngoal = [19, 19, 3]\n"

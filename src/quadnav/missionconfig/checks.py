@@ -100,14 +100,18 @@ def plugin_text(kind: str) -> Callable[[str], None]:
 
 
 def file(value: Any, info: ValidationInfo) -> Any:
-    """A string naming an existing file relative to the mission file's folder: that file's
-    absolute path; any other value as it is (a preset, a built-in world, a course name)."""
+    """A string naming an existing file relative to the mission file's folder, or a plug-in
+    in such a file (``path/to/file.py:Name(...)``): the same with the file's absolute path;
+    any other value as it is (a preset, a built-in world, a course map, a module)."""
     folder = (info.context or {}).get("folder")
-    if isinstance(value, str) and folder is not None and not Path(value).is_absolute():
-        path = Path(folder) / value
-        if path.is_file():
-            return os.path.abspath(path)
-    return value
+    if not isinstance(value, str) or folder is None:
+        return value
+    where, colon, name = value.partition(":")
+    named, rest = (where, colon + name) if colon and where.endswith(".py") else (value, "")
+    path = Path(folder) / named
+    if Path(named).is_absolute() or not path.is_file():
+        return value
+    return os.path.abspath(path) + rest
 
 
 def table_or_text(value: Any) -> str | dict | None:

@@ -77,7 +77,7 @@ class Planner(Section):
         refine: shortcut and smooth the path.
     """
 
-    name: Annotated[str, text(get_planner)] = "rrtstar"
+    name: Annotated[str, text(get_planner), BeforeValidator(file)] = "rrtstar"
     time: Annotated[float, number(PLAN_TIME)] = DEFAULT_TIME_CAP
     iterations: Annotated[int, number(SAMPLES)] = 0
     improve: Annotated[int, number(SAMPLES)] = DEFAULT_IMPROVE
@@ -100,7 +100,8 @@ class Trajectory(Section):
     timing: Annotated[str, text(choice(lambda: TIMINGS))] = "fastest"
     speed: Annotated[Speed, BeforeValidator(top_speed)] = DEFAULT_SPEED
     accel: Annotated[float, number(ACCELERATION)] = DEFAULT_ACCELERATION
-    reference: Annotated[str | None, text(plugin_text("reference"), optional=True)] = None
+    reference: Annotated[str | None, text(plugin_text("reference"), optional=True),
+                         BeforeValidator(file)] = None
 
 
 class Controller(Section):
@@ -112,7 +113,7 @@ class Controller(Section):
             table's name, or a table of keys; None: the vehicle's own.
     """
 
-    name: Annotated[str, text(controller_factory)] = DEFAULT_CONTROLLER
+    name: Annotated[str, text(controller_factory), BeforeValidator(file)] = DEFAULT_CONTROLLER
     gains: TextOrTable = None
 
 
@@ -168,7 +169,8 @@ class Disturbances(Section):
     """
 
     wind: Annotated[tuple[float, float, float], vector(FORCE, "fx, fy, fz")] = (0.0, 0.0, 0.0)
-    wind_model: Annotated[str | None, text(plugin_text("wind model"), optional=True)] = None
+    wind_model: Annotated[str | None, text(plugin_text("wind model"), optional=True),
+                          BeforeValidator(file)] = None
     gusts: Annotated[float, number(GUSTS)] = 0.0
     spread: Annotated[Spread, BeforeValidator(spread_table)] = Spread()
 
