@@ -5,6 +5,7 @@ vehicle's gains."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -36,9 +37,12 @@ def test_the_library_flies_a_vehicle_with_its_own_gains():
     # vehicle (100 times the inertia) cannot fly well, where the command line loaded its own
     settings = MissionSettings(vehicle=RBE595)
 
-    assert as_plain(settings.gains) == as_plain(load_gains(preset="rbe595"))
-    assert as_plain(settings.gains) != as_plain(Gains())
-    assert as_plain(MissionSettings().gains) == as_plain(Gains())  # the Tello's are the defaults
+    assert as_plain(settings.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(settings.flown_gains) != as_plain(Gains())
+    assert as_plain(MissionSettings().flown_gains) == as_plain(Gains())  # the Tello's
+    # another vehicle put in later flies its own too, not the gains of the one it replaced
+    swapped = dataclasses.replace(MissionSettings(), vehicle=RBE595)
+    assert as_plain(swapped.flown_gains) == as_plain(load_gains(preset="rbe595"))
     # and so do the other entries of the library: a tracking and its parameters
     tracking = track_reference(load_reference("hover:duration=0.5"), RBE595)
     assert tracking.parameters()["gains"] == as_plain(load_gains(preset="rbe595"))

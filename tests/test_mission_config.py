@@ -263,5 +263,6 @@ def test_the_library_defaults_are_the_builders():
                 "controller", "sim", "plant", "reference"):
         assert as_plain(getattr(built, key)) == as_plain(getattr(library, key)), key
     rbe595 = MissionSettings(vehicle=load_params("rbe595"))
-    assert as_plain(MissionConfig(vehicle="rbe595").settings().gains) == as_plain(rbe595.gains)
-    assert as_plain(rbe595.gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(MissionConfig(vehicle="rbe595").settings().flown_gains) == as_plain(
+        rbe595.flown_gains)
+    assert as_plain(rbe595.flown_gains) == as_plain(load_gains(preset="rbe595"))

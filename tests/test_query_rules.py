@@ -18,7 +18,6 @@ import warnings
 import pytest
 from clitools import assert_user_error, run_here
 
-from quadnav.control.gains import load_gains
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.hardware.flight_plan import plan_flight
 from quadnav.kinodynamic import KinoSettings
@@ -130,7 +129,7 @@ def test_a_trajectory_the_vehicle_cannot_fly_is_refused_with_what_would_work(tmp
     settings = MissionSettings(trajectory=TrajectorySettings(v_max=speed, a_max=accel))
     mission = fly_mission(world, None, None, None, settings)
     assert mission.success
-    limits = vehicle_limits(settings.vehicle, settings.gains)
+    limits = vehicle_limits(settings.vehicle, settings.limit_gains)
     assert feasibility(mission.trajectory, None, limits).ok
     assert mission.success
 
@@ -159,7 +158,7 @@ def test_speed_max_flies_the_fastest_trajectory_the_vehicle_can_follow(tmp_path)
     mission = fly_mission(load_world("forest"), None, None, None, settings)
     assert mission.settings.trajectory.v_max == pytest.approx(metrics["speed_m_s"])
     assert mission.trajectory.duration == pytest.approx(metrics["trajectory_duration_s"])
-    limits = vehicle_limits(settings.vehicle, settings.gains)
+    limits = vehicle_limits(settings.vehicle, settings.limit_gains)
     assert feasibility(mission.trajectory, None, limits).ok
 
 
@@ -184,9 +183,9 @@ def test_a_slow_turning_vehicle_is_flown_within_its_rotors_torque_and_reaches_th
     # stretch it where it would, and the flight reaches the goal.
     vehicle = load_params("rbe595")
     settings = MissionSettings(trajectory=TrajectorySettings(v_max=2.0, a_max=3.0),
-                               vehicle=vehicle, gains=load_gains(None, vehicle.gains))
+                               vehicle=vehicle)  # its own gains
     mission = fly_mission(load_world("forest"), None, None, None, settings)
-    limits = vehicle_limits(vehicle, mission.settings.gains)
+    limits = vehicle_limits(vehicle, mission.settings.limit_gains)
     assert limits.angular_acceleration_max == pytest.approx(0.5 * 3.4326, rel=1e-4)
     report = feasibility(mission.trajectory, None, limits)
     assert report.ok
@@ -226,11 +225,10 @@ def test_the_documented_torque_refusal_and_its_advice_hold_with_a_clear_margin()
     # (--method quintic --speed 3) asked 1.0002 times the limit here and 0.994 times it
     # with another BLAS kernel, and was flown; the advice rested on 0.4 % as well.
     world = load_world("forest")
-    settings = MissionSettings(vehicle=load_params("rbe595"))
-    settings = dataclasses.replace(settings, gains=load_gains(None, settings.vehicle.gains))
+    settings = MissionSettings(vehicle=load_params("rbe595"))  # flies the rbe595's own gains
     problem = make_problem(world, None, None, world.margin)
     path = refine(problem, plan(problem, settings.planning, settings.planner)).path
-    limits = vehicle_limits(settings.vehicle, settings.gains)
+    limits = vehicle_limits(settings.vehicle, settings.limit_gains)
     space = SafeSpace(world, problem.margin)
 
     def asked(**trajectory) -> float:
@@ -244,6 +242,6 @@ def test_the_documented_torque_refusal_and_its_advice_hold_with_a_clear_margin()
     assert asked() > 2.0  # refused by far (2.49)
     with pytest.raises(QuadnavError, match="--speed 2 --accel ") as refusal:
         flyable_trajectory(path, TrajectorySettings(method="quintic-average"), space,
-                           settings.vehicle, settings.gains)
+                           settings.vehicle, settings.limit_gains)
     accel = float(str(refusal.value).split("--accel ")[1].split()[0])
     assert asked(a_max=accel) < 0.97  # the advice flies by a clear margin (0.959)

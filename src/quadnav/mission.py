@@ -82,9 +82,9 @@ class MissionSettings:
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the controller's own gains (the cascade's
             :class:`~quadnav.control.gains.Gains`, SE(3)'s
-            :class:`~quadnav.control.se3.SE3Gains`); None: those tuned for ``vehicle``
-            (:func:`~quadnav.control.registry.controller_gains`), never another
-            vehicle's. A controller without gains of its own keeps None.
+            :class:`~quadnav.control.se3.SE3Gains`); None: those tuned for ``vehicle``,
+            whichever it is (:attr:`flown_gains`), so that a vehicle never flies with
+            another vehicle's gains unless they are given.
         controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
             ``cascade``, ``se3`` or one registered) or a plug-in spec.
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
@@ -111,22 +111,30 @@ class MissionSettings:
     reference: str | None = None
 
     def __post_init__(self) -> None:
-        if self.gains is None:  # QuadnavError naming the choices for an unknown controller
-            object.__setattr__(self, "gains", controller_gains(self.controller, self.vehicle))
+        # QuadnavError naming the choices for an unknown controller, or bad gains
         check_control_rate(self.flying_controller(), self.flown_vehicle, self.sim.control_rate)
+
+    @property
+    def flown_gains(self) -> Any:
+        """The gains the controller flies with: ``gains``, else those tuned for ``vehicle``
+        (:func:`~quadnav.control.registry.controller_gains`; None for a controller without
+        gains of its own)."""
+        if self.gains is not None:
+            return self.gains
+        return controller_gains(self.controller, self.vehicle)
 
     def flying_controller(self) -> Controller:
         """The controller, with its gains, for the vehicle as it knows it (``vehicle``)."""
-        return make_controller(self.controller, self.vehicle, self.gains)
+        return make_controller(self.controller, self.vehicle, self.flown_gains)
 
     @property
     def limit_gains(self) -> Gains:
         """The cascade gains whose saturations (thrust, tilt, rates, speed) bound what the
-        trajectory may ask (:func:`~quadnav.sim.envelope.vehicle_limits`): ``gains`` when
-        the cascade flies, else the cascade's tuned for ``vehicle``."""
-        if isinstance(self.gains, Gains):
-            return self.gains
-        return controller_gains(DEFAULT_CONTROLLER, self.vehicle)
+        trajectory may ask (:func:`~quadnav.sim.envelope.vehicle_limits`): the flown gains
+        when the cascade flies, else the cascade's tuned for ``vehicle``."""
+        gains = self.flown_gains
+        return gains if isinstance(gains, Gains) else controller_gains(DEFAULT_CONTROLLER,
+                                                                        self.vehicle)
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -185,7 +193,7 @@ class Mission:
             "planning": as_plain(self.settings.planning),
             "trajectory": as_plain(self.settings.trajectory),
             "vehicle": as_plain(self.settings.vehicle),
-            "gains": as_plain(self.settings.gains),
+            "gains": as_plain(self.settings.flown_gains),
             "controller": self.settings.controller,
             "simulation": as_plain(self.settings.sim),
         } | plant

@@ -59,7 +59,8 @@ class MissionFiles:
 
     Attributes:
         vehicle: the nominal vehicle.
-        gains: the controller's own gains (None for a controller without gains).
+        gains: the controller's gains as given, or None: those tuned for the vehicle
+            (:attr:`~quadnav.mission.MissionSettings.flown_gains`).
     """
 
     vehicle: VehicleParams
@@ -158,11 +159,12 @@ class MissionConfig(Section):
         naming the mission file's line when one is bad)."""
         with self._keyed("vehicle"):
             vehicle = vehicle_from(self.vehicle, self._where("vehicle"))
-        gains_key = "controller.gains" if self.controller.gains is not None else "controller.name"
-        with self._keyed(gains_key):
-            gains = controller_gains(self.controller.name, vehicle, self.controller.gains,
+        given = self.controller.gains
+        gains_key = "controller.name" if given is None else "controller.gains"
+        with self._keyed(gains_key):  # checked here, for the line: the vehicle's own too
+            gains = controller_gains(self.controller.name, vehicle, given,
                                      self._where(gains_key))
-        return MissionFiles(vehicle, gains)
+        return MissionFiles(vehicle, None if given is None else gains)
 
     def world(self) -> World:
         """The map (QuadnavError naming the mission file's line when it cannot be read)."""
@@ -244,7 +246,8 @@ class MissionConfig(Section):
                 load_params(settings.vehicle.name)):
             vehicle = settings.vehicle.name
         own = controller_gains(settings.controller, settings.vehicle)
-        gains = None if _values(settings.gains) == _values(own) else _values(settings.gains)
+        flown = _values(settings.flown_gains)
+        gains = None if flown == _values(own) else flown
         query = Query(start=tuple(problem.start), goal=tuple(problem.goal_asked),
                       margin=problem.margin)
         changes = {"map": os.path.abspath(self.map) if Path(self.map).is_file() else self.map,
