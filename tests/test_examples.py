@@ -36,7 +36,8 @@ def run_example(capsys, monkeypatch):
 
 def test_every_example_is_tested():
     tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
-              "custom_reference.py", "custom_controller.py", "batch_study.py"}
+              "custom_reference.py", "custom_controller.py", "batch_study.py",
+              "plain_planner.py"}
     assert {path.name for path in EXAMPLES.glob("*.py")} == tested
 
 
@@ -49,6 +50,11 @@ def test_plan_and_fly(run_example):
 def test_a_planner_of_ones_own_flies_a_course_map(run_example, fetched_course_maps):
     out = run_example("custom_planner.py", "course:meam620/test_window")
     assert out.startswith("test_window by PRM: success True"), out
+
+
+def test_a_plain_planner_function_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_planner.py")
+    assert out.startswith("graph search at 0.25 m: success True"), out
 
 
 def test_a_trajectory_method_of_ones_own_flies(run_example):
