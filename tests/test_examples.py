@@ -37,7 +37,7 @@ def run_example(capsys, monkeypatch):
 def test_every_example_is_tested():
     tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
               "custom_reference.py", "custom_controller.py", "batch_study.py",
-              "plain_planner.py"}
+              "plain_planner.py", "plain_trajectory.py"}
     assert {path.name for path in EXAMPLES.glob("*.py")} == tested
 
 
@@ -60,6 +60,11 @@ def test_a_plain_planner_function_flies_a_shipped_course_map(run_example):
 def test_a_trajectory_method_of_ones_own_flies(run_example):
     out = run_example("custom_trajectory.py", "window")
     assert out.startswith("minimum jerk: success True"), out
+
+
+def test_a_plain_trajectory_class_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_trajectory.py")
+    assert out.startswith("stop and go at 1.5 m/s: success True"), out
 
 
 def test_a_reference_of_ones_own_is_tracked(run_example):
