@@ -18,7 +18,7 @@ from clitools import assert_user_error, run, run_here
 
 from quadnav.errors import QuadnavError
 from quadnav.mission import MissionSettings, fly_mission
-from quadnav.plugins import PluginError
+from quadnav.plugins import PluginError, literal_arrays
 from quadnav.sim.simulate import reference_table
 from quadnav.trajectory.plain import FlatOutputReference
 from quadnav.trajectory.references import load_reference
@@ -266,3 +266,14 @@ def test_a_missions_class_must_fly_from_its_start_to_its_goal(classes, tmp_path)
         f"quadnav: error: reference {classes}:Elsewhere starts at (-4, 0, 2.5), 1 m from the "
         "start (-4, 0, 1.5) (the goal tolerance is 0.1 m): a mission's reference flies from "
         "its start to its goal")
+
+
+def test_a_list_of_numbers_in_a_spec_arrives_as_an_array():
+    given = literal_arrays({"freq": [0.2, 0.2, 0], "points": [[0, 0, 1], [2, 0, 1.5]],
+                            "ragged": [[1, 2], [3]], "flags": [True, False], "names": ["a"],
+                            "empty": [], "speed": 1.5, "label": "x"})
+    assert given["freq"].dtype == np.float64 and given["freq"].tolist() == [0.2, 0.2, 0.0]
+    assert given["points"].shape == (2, 3)
+    assert {key: given[key] for key in ("ragged", "flags", "names", "empty", "speed", "label")
+            } == {"ragged": [[1, 2], [3]], "flags": [True, False], "names": ["a"], "empty": [],
+                  "speed": 1.5, "label": "x"}
