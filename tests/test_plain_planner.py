@@ -110,7 +110,10 @@ def test_a_plain_function_is_called_even_when_the_goal_is_in_sight(planners):
      "returned point 1 (0, 0, nan): expected finite numbers"),
     ("given(points='north')", "returned str 'north': expected a path, an array (N, 3) of "
                               "numbers"),
-    ("nothing", "found no path (it returned nothing)"),
+    ("given(points=[[-4, 0, 1.5], [3, 0]])", "returned list '[[-4, 0, 1.5], [3, 0]]': expected "
+                                            "a path, an array (N, 3) of numbers"),
+    ("nothing", "found no path (it returned None)"),
+    ("given(points=[])", "found no path (it returned an empty path)"),
 ])
 def test_what_a_plain_function_returns_is_checked_exactly(planners, pillar, spec, fault):
     result = plan(pillar, planner=f"{planners}:{spec}")

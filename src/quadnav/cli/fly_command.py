@@ -196,8 +196,8 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         "(--speed, --accel, --method and --timing then do not apply): "
                         "module:Class or path/to/file.py:Class in rotorpy's shape, optionally "
                         "with literal keyword arguments, Class(key=value, ...); built with "
-                        "the path as points=(N, 3) when it takes points, its update(t) "
-                        "sampled at the control rate")
+                        "the path (shortcut, not smoothed) as points=(N, 3) when it takes "
+                        "points, its update(t) sampled at the control rate")
     add_duration_argument(p)
     add_vehicle_arguments(p)
     add_controller_argument(p)

@@ -106,13 +106,15 @@ def checked_path(problem: PlanningProblem, returned: Any) -> tuple[Any, str | No
     ``problem.search_start`` to exactly ``problem.search_goal`` (consecutive repeats
     dropped) and None when it is a path :func:`path_fault` finds no fault in; else the
     points returned (None when they are not an (N, 3) array) and the fault."""
-    if returned is None or (np.size(returned) == 0 and not isinstance(returned, str)):
-        return None, "found no path (it returned nothing)"
+    if returned is None:
+        return None, "found no path (it returned None)"
     try:
         points = np.array(returned, dtype=np.float64)
     except (TypeError, ValueError):
         return None, (f"returned {type(returned).__name__} {str(returned)[:40]!r}: expected "
                       "a path, an array (N, 3) of numbers")
+    if points.size == 0:
+        return None, "found no path (it returned an empty path)"
     if points.ndim != 2 or points.shape[1] != 3 or not 2 <= len(points) <= MAX_WAYPOINTS:
         return None, (f"returned an array of shape {points.shape}: expected a path (N, 3), "
                       f"2 <= N <= {MAX_WAYPOINTS:,}")
