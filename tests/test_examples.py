@@ -36,7 +36,8 @@ def run_example(capsys, monkeypatch):
 
 def test_every_example_is_tested():
     tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
-              "custom_reference.py", "custom_controller.py", "batch_study.py"}
+              "custom_reference.py", "custom_controller.py", "batch_study.py",
+              "plain_planner.py", "plain_trajectory.py"}
     assert {path.name for path in EXAMPLES.glob("*.py")} == tested
 
 
@@ -51,9 +52,19 @@ def test_a_planner_of_ones_own_flies_a_course_map(run_example, fetched_course_ma
     assert out.startswith("test_window by PRM: success True"), out
 
 
+def test_a_plain_planner_function_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_planner.py")
+    assert out.startswith("graph search at 0.25 m: success True"), out
+
+
 def test_a_trajectory_method_of_ones_own_flies(run_example):
     out = run_example("custom_trajectory.py", "window")
     assert out.startswith("minimum jerk: success True"), out
+
+
+def test_a_plain_trajectory_class_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_trajectory.py")
+    assert out.startswith("stop and go at 1.5 m/s: success True"), out
 
 
 def test_a_reference_of_ones_own_is_tracked(run_example):

@@ -142,8 +142,12 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
                           improve: int | None) -> None:
     """--planner NAME, --time S, --seed N, --iterations N and --improve N with the given
     defaults (``iterations`` 0: no cap; ``improve`` None: no limit)."""
-    parser.add_argument("--planner", default="rrtstar", metavar="NAME",
-                        help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    parser.add_argument("--planner", default="rrtstar", metavar="NAME|SPEC",
+                        help=f"one of {', '.join(planner_names())}, or a function of your "
+                             "own, module:FUNCTION or path/to/file.py:FUNCTION, optionally "
+                             "with literal keyword arguments, FUNCTION(key=value, ...), called "
+                             "as FUNCTION(world, start, goal, margin) -> path (N, 3) "
+                             "(default: rrtstar)")
     parser.add_argument("--time", type=plan_time, default=time, metavar="S",
                         help=f"search time budget, {PLAN_TIME.describe()} (default: {time:g})")
     add_seed_argument(parser, "random seed")

@@ -160,8 +160,10 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                         f"(default: {DEFAULT_PRESET})")
     p.add_argument("--gains", metavar="NAME|FILE",
                    help="controller gains: a TOML file or a course gain table (as in fly)")
-    p.add_argument("--planner", metavar="NAME",
-                   help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    p.add_argument("--planner", metavar="NAME|SPEC",
+                   help=f"one of {', '.join(planner_names())}, or a function of your own, "
+                        "module:FUNCTION or path/to/file.py:FUNCTION (as in fly; default: "
+                        "rrtstar)")
     add_executor_arguments(p)
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")

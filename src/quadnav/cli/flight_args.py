@@ -14,6 +14,7 @@ from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
+from quadnav.trajectory.references import DURATION
 from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
 
 
@@ -29,6 +30,14 @@ def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
                              "turns and the ends; rest-to-rest gives each segment a "
                              "stop-and-go move; snap-time trades snap for time (minsnap) "
                              "(default: fastest)")
+
+
+def add_duration_argument(parser: argparse.ArgumentParser) -> None:
+    """--duration S: how long a trajectory class of your own is flown."""
+    parser.add_argument("--duration", type=number_in(DURATION), metavar="S",
+                        help=f"how long a trajectory class of your own is flown, "
+                             f"{DURATION.describe()} (default: as long as it says: its "
+                             "duration, or the last of rotorpy's t_keyframes)")
 
 
 def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:

@@ -20,6 +20,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import (
     add_controller_argument,
+    add_duration_argument,
     add_simulation_arguments,
     add_strict_argument,
     add_timing_arguments,
@@ -36,6 +37,7 @@ from quadnav.cli.flight_lines import (
 )
 from quadnav.cli.progress import fraction_bar, planning_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
+from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED
 from quadnav.mission import (
     DEFAULT_ACCELERATION,
@@ -52,6 +54,7 @@ from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.flight import Ending, Flight
 from quadnav.trajectory.generate import TrajectorySettings
+from quadnav.trajectory.plain import load_trajectory_class
 from quadnav.world import load_world
 
 #: Exit code of a flight that collided, missed the goal or found no path.
@@ -71,12 +74,19 @@ def mission_settings(args: argparse.Namespace) -> MissionSettings:
         gains=gains,
         controller=args.controller,
         sim=simulation_settings(args),
+        reference=args.reference,
+        reference_duration=args.duration,
     )
 
 
 def fly(args: argparse.Namespace) -> int:
     """Run the mission, write the outputs; exit 1 unless it reached the goal cleanly."""
     get_planner(args.planner)
+    if args.reference is not None:
+        load_trajectory_class(args.reference, with_points=True)
+    elif args.duration is not None:
+        raise QuadnavError("--duration: applies only to a trajectory class of your own "
+                           "(--reference)")
     folder = check_output_folder(args.output)
     settings = mission_settings(args)
     world = load_world(args.map)
@@ -131,10 +141,12 @@ def print_summary(mission: Mission) -> bool:
     """Print the outcome and headline figures of ``mission``, a few lines, and a warning
     line on stderr when the flight kept less margin than asked; returns whether it did."""
     m = mission.metrics()
-    controller = mission.settings.controller
+    controller, reference = mission.settings.controller, mission.settings.reference
     flown_by = "" if controller == DEFAULT_CONTROLLER else f", controller {controller}"
+    along = (f"top speed {m['speed_m_s']:.3g} m/s" if reference is None
+             else f"reference {reference}")
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
-          f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, top speed {m['speed_m_s']:.3g} m/s")
+          f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, {along}")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
         return False
@@ -179,6 +191,14 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         ": one budget for speeding up, braking and turning (default: "
                         f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
     add_timing_arguments(p)
+    p.add_argument("--reference", metavar="SPEC",
+                   help="fly a trajectory class of your own instead of quadnav's trajectory "
+                        "(--speed, --accel, --method and --timing then do not apply): "
+                        "module:Class or path/to/file.py:Class in rotorpy's shape, optionally "
+                        "with literal keyword arguments, Class(key=value, ...); built with "
+                        "the path (shortcut, not smoothed) as points=(N, 3) when it takes "
+                        "points, its update(t) sampled at the control rate")
+    add_duration_argument(p)
     add_vehicle_arguments(p)
     add_controller_argument(p)
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE)

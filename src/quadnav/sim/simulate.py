@@ -64,10 +64,13 @@ def flight_steps(duration: float, settings: SimSettings) -> int:
 
 def reference_table(trajectory: Reference, dt: float, steps: int) -> FloatArray:
     """(steps, 11) reference rows at times ``k dt``: position, velocity, acceleration,
-    yaw, yaw rate (the yaw's finite difference)."""
+    yaw, yaw rate (the reference's ``yaw_rate(t)`` when it has one, else the yaw's finite
+    difference)."""
     t = np.arange(steps) * dt
     yaw = np.unwrap(np.broadcast_to(trajectory.yaw(t), t.shape))
-    yaw_rate = np.gradient(yaw, dt) if steps > 1 else np.zeros(steps)
+    rate = getattr(trajectory, "yaw_rate", None)
+    yaw_rate = (np.broadcast_to(rate(t), t.shape) if rate is not None
+                else np.gradient(yaw, dt) if steps > 1 else np.zeros(steps))
     return np.column_stack([trajectory.position(t), trajectory.velocity(t),
                             trajectory.acceleration(t), yaw, yaw_rate])
 
