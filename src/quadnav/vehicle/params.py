@@ -6,6 +6,11 @@ rotor spinning counter-clockwise seen from above. A motor command ``u`` in [0, 1
 for ``u`` times the rotor's largest thrust (as the RBE595 starter's ``U``): the rotor
 speed chases ``w_max sqrt(u)`` with a first-order lag.
 
+Drag: a linear drag on the body-frame airspeed (``drag``), and rotorpy's aerodynamics
+(all zero in the presets): the rotor drag (H force) each rotor meets at its hub,
+quadratic parasitic drag on the frame, translational lift and the flapping moment, as
+rotorpy's ``Multirotor`` computes them (see :mod:`quadnav.vehicle.dynamics`).
+
 Presets are TOML files shipped in ``quadnav/vehicle/presets`` (``tello``, ``rbe595``);
 each states its sources. A user's file sets any keys on top of the preset named by its
 ``based_on`` key (default ``tello``).
@@ -46,6 +51,17 @@ class VehicleParams:
         rotor_speed_max: largest rotor speed, rad/s.
         motor_time_constant: first-order lag of the rotor speed, s.
         drag: (3,) linear drag coefficients along body x, y, z, N / (m/s).
+        rotor_drag: (3,) rotor drag coefficients along body x, y, z, N / (rad/s) / (m/s)
+            (rotorpy's ``k_d, k_d, k_z``): rotor ``i`` spinning at ``w_i`` meets
+            ``-w_i diag(rotor_drag) u_i`` at its hub, ``u_i`` the airspeed there in body
+            axes (the body's airspeed plus the body rates' share, ``w x r_i``).
+        parasitic_drag: (3,) quadratic drag coefficients along body x, y, z, N / (m/s)^2
+            (rotorpy's ``c_Dx, c_Dy, c_Dz``): ``-|u| diag(parasitic_drag) u`` at the
+            centre, ``u`` the body-frame airspeed.
+        translational_lift: N / (m/s)^2 (rotorpy's ``k_h``): each rotor's thrust grows by
+            ``translational_lift (u_x^2 + u_y^2)``, ``u`` the airspeed at its hub.
+        flapping: N m / (rad/s) / (m/s) (rotorpy's ``k_flap``): each rotor twists the body
+            by ``-flapping w_i (u_i x e_z)``, the blade flapping moment.
         body_size: (3,) size of the collision box along body x, y, z, m.
         gravity: m/s^2.
         gains: name of the controller gain set tuned for this vehicle (see
@@ -61,6 +77,10 @@ class VehicleParams:
     rotor_speed_max: float = 1490.0
     motor_time_constant: float = 0.02
     drag: FloatArray = vector_field(0.04, 0.04, 0.06)
+    rotor_drag: FloatArray = vector_field(0.0, 0.0, 0.0)
+    parasitic_drag: FloatArray = vector_field(0.0, 0.0, 0.0)
+    translational_lift: float = 0.0
+    flapping: float = 0.0
     body_size: FloatArray = vector_field(0.10, 0.10, 0.05)
     gravity: float = GRAVITY
     gains: str = "tello"
@@ -72,6 +92,9 @@ class VehicleParams:
                   f"{key} must be > 0, got {getattr(self, key)}") for key in positive] + [
             (bool(np.all(self.inertia > 0)), f"inertia must be > 0, got {self.inertia}"),
             (bool(np.all(self.drag >= 0)), f"drag must be >= 0, got {self.drag}"),
+            *[(bool(np.all(np.isfinite(getattr(self, key)) & (getattr(self, key) >= 0))),
+               f"{key} must be >= 0, got {getattr(self, key)}")
+              for key in ("rotor_drag", "parasitic_drag", "translational_lift", "flapping")],
             (bool(np.all(self.body_size > 0)), f"body_size must be > 0, got {self.body_size}"),
             (self.max_total_thrust > self.weight,
              f"the rotors lift {self.max_total_thrust:.3g} N in all, not more than the "
@@ -120,6 +143,20 @@ class VehicleParams:
     def hover_command(self) -> float:
         """Motor command in [0, 1] that hovers: a quarter of the weight per rotor."""
         return self.weight / self.max_total_thrust
+
+    @property
+    def hover_rotor_speed(self) -> float:
+        """Each rotor's speed in a hover, rad/s."""
+        return self.rotor_speed_max * math.sqrt(self.hover_command)
+
+    @property
+    def hover_drag(self) -> FloatArray:
+        """(3,) the linear drag, N / (m/s), along body x, y, z, that the vehicle meets
+        flying slowly with its rotors near the hover speed: ``drag`` plus the rotor drag of
+        the four rotors there, ``4 w_hover rotor_drag`` (the quadratic parasitic drag
+        vanishes at low speed). What quadnav's linear models of the vehicle (the
+        trajectory's envelope) count."""
+        return self.drag + 4.0 * self.hover_rotor_speed * self.rotor_drag
 
 
 def preset_names() -> list[str]:
