@@ -14,7 +14,12 @@ from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
-from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
+from quadnav.vehicle.params import (
+    DEFAULT_PRESET,
+    VehicleParams,
+    load_params,
+    vehicle_forms,
+)
 
 
 def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
@@ -34,8 +39,7 @@ def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
 def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
     """--params NAME|FILE (the vehicle) and --gains FILE (the controller)."""
     parser.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
-                        help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                             f"(default: {DEFAULT_PRESET})")
+                        help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     parser.add_argument("--gains", metavar="NAME|FILE",
                         help="controller gains: a TOML file, or a course gain table ("
                              f"{', '.join(course_gain_names())}); keys it leaves out keep "

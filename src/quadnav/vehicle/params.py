@@ -13,13 +13,15 @@ rotorpy's ``Multirotor`` computes them (see :mod:`quadnav.vehicle.dynamics`).
 
 Presets are TOML files shipped in ``quadnav/vehicle/presets`` (``tello``, ``rbe595``);
 each states its sources. A user's file sets any keys on top of the preset named by its
-``based_on`` key (default ``tello``).
+``based_on`` key (default ``tello``). A rotorpy parameter dict is a vehicle too
+(:mod:`quadnav.vehicle.rotorpy_params`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -29,6 +31,7 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.config import from_table, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
+from quadnav.plugins import load_target, parse_spec
 
 #: Standard gravity, m/s^2.
 GRAVITY = 9.81
@@ -169,8 +172,17 @@ def _presets():
     return resources.files("quadnav.vehicle") / "presets"
 
 
+def vehicle_forms() -> str:
+    """What names a vehicle (:func:`load_params`), for help texts and messages."""
+    return (f"a vehicle preset ({', '.join(preset_names())}), a TOML file or a rotorpy "
+            "parameter dict (module:NAME or path/to/file.py:NAME)")
+
+
 def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
-    """A preset by name (see :func:`preset_names`) or a TOML file's parameters."""
+    """A preset by name (see :func:`preset_names`), a TOML file's parameters, or a rotorpy
+    parameter dict named where it is, ``module:NAME`` or ``path/to/file.py:NAME``, with
+    keys replaced by keyword arguments if any (``...:quad_params(k_d=0, k_z=0)``; see
+    :mod:`quadnav.vehicle.rotorpy_params`)."""
     if str(spec) in preset_names():
         path = _presets() / f"{spec}.toml"
         with resources.as_file(path) as real:
@@ -179,11 +191,34 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
         return from_table(VehicleParams(name=str(spec)), table, f"preset {spec}")
     path = Path(spec)
     if not path.is_file():
-        raise QuadnavError(f"{spec}: expected a vehicle preset ({', '.join(preset_names())}) "
-                           "or a TOML file")
+        if ":" in str(spec):
+            return _rotorpy_vehicle(str(spec))
+        raise QuadnavError(f"{spec}: expected {vehicle_forms()}")
     table = read_toml(path)
     base = table.pop("based_on", DEFAULT_PRESET)
     if base not in preset_names():
         raise QuadnavError(f"{path}: based_on must name a preset "
                            f"({', '.join(preset_names())}), got {base!r}")
     return from_table(load_params(base).replace(name=path.stem), table, str(path))
+
+
+def _rotorpy_vehicle(text: str) -> VehicleParams:
+    """The vehicle of the rotorpy dict that ``text`` names (see :func:`load_params`), called
+    after its module or file (and the dict's name, unless it is ``quad_params``)."""
+    # imported here: the conversion module builds on this one
+    from quadnav.vehicle.rotorpy_params import ROTORPY_KEYS, vehicle_from_rotorpy
+
+    spec = parse_spec(text, "vehicle")
+    table = load_target(spec.target, "vehicle")
+    if not isinstance(table, Mapping):
+        raise QuadnavError(f"vehicle {spec.target}: expected a rotorpy parameter dict, got "
+                           f"{type(table).__name__}")
+    unknown = sorted(set(spec.kwargs) - ROTORPY_KEYS - set(table))
+    if unknown:
+        raise QuadnavError(f"vehicle {text}: unknown key {unknown[0]!r}; expected one of "
+                           f"{', '.join(sorted(ROTORPY_KEYS | set(table)))}")
+    where, _, attribute = spec.target.partition(":")
+    name = Path(where).stem if where.endswith(".py") else where.rpartition(".")[2]
+    if attribute != "quad_params":
+        name += f".{attribute}"
+    return vehicle_from_rotorpy({**table, **spec.kwargs}, name, f"vehicle {text}")
