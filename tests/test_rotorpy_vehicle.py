@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from clitools import assert_user_error, run_here
 
+from quadnav.batch.grid import read_spec
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.sim.envelope import vehicle_limits
@@ -149,3 +150,13 @@ def test_fly_a_rotorpy_vehicle_and_refuse_a_bad_one(tmp_path, my_params):
     assert_user_error(run_here("fly", SMALL, "--params", f"{my_params}:quad_params(Ixy=1e-6)",
                                "-o", out), "Ixy must be 0")
     assert not out.exists()
+
+
+def test_a_batch_names_a_rotorpy_vehicle_by_a_file_beside_its_spec(my_params):
+    spec = my_params.parent / "spec.toml"
+    spec.write_text("seeds = 1\nspeeds = [1]\nmaps = ['forest']\n"
+                    "vehicle = 'my_params.py:quad_params(k_d=0)'\n")
+    assert read_spec(spec).fixed.vehicle == f"{my_params}:quad_params(k_d=0)"
+    spec.write_text(spec.read_text().replace("k_d=0", "Ixy=1e-6"))
+    with pytest.raises(QuadnavError, match=r"spec.toml:4: vehicle: vehicle .* Ixy must be 0"):
+        read_spec(spec)
