@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from clitools import assert_user_error, run_here
 
-from quadnav.batch.grid import read_spec
+from quadnav.batch.fly_one import load_context, mission_settings, spread_factors
+from quadnav.batch.grid import parse_spec, read_spec
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.sim.envelope import vehicle_limits
@@ -160,3 +161,15 @@ def test_a_batch_names_a_rotorpy_vehicle_by_a_file_beside_its_spec(my_params):
     spec.write_text(spec.read_text().replace("k_d=0", "Ixy=1e-6"))
     with pytest.raises(QuadnavError, match=r"spec.toml:4: vehicle: vehicle .* Ixy must be 0"):
         read_spec(spec)
+
+
+def test_a_batch_spread_scales_the_rotor_and_parasitic_drag_with_the_linear(my_params):
+    spec = parse_spec({"maps": ["forest"], "seeds": [4], "speeds": [1.0], "spreads": [0.3],
+                       "vehicle": "my_params.py:quad_params"}, my_params.parent)
+    context = load_context(spec)
+    mission = spec.missions()[0]
+    plant = mission_settings(context, mission).plant
+    drag = spread_factors(mission)[2]
+    assert drag != 1.0 and plant is not None
+    for key in ("rotor_drag", "parasitic_drag"):
+        assert np.allclose(getattr(plant, key), getattr(context.vehicle, key) * drag, rtol=1e-15)
