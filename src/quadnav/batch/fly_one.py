@@ -108,7 +108,9 @@ def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSett
     if (mass, thrust, drag) != (1.0, 1.0, 1.0):
         plant = vehicle.replace(mass=vehicle.mass * mass,
                                 thrust_coefficient=vehicle.thrust_coefficient * thrust,
-                                drag=vehicle.drag * drag)
+                                drag=vehicle.drag * drag,
+                                rotor_drag=vehicle.rotor_drag * drag,
+                                parasitic_drag=vehicle.parasitic_drag * drag)
     return MissionSettings(
         planner=mission.planner,
         planning=PlannerSettings(time_limit=fixed.time_cap, improve_iterations=fixed.improve,

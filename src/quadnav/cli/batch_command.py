@@ -30,7 +30,7 @@ from quadnav.limits import Range
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
 from quadnav.planning import planner_names
 from quadnav.runfolder import check_output_folder
-from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+from quadnav.vehicle.params import DEFAULT_PRESET, vehicle_forms
 
 #: Seeds of the simple case when --seeds is not given.
 DEFAULT_SEEDS = 10
@@ -156,8 +156,7 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
     add_margin_argument(p)
     add_start_goal_arguments(p)
     p.add_argument("--params", metavar="NAME|FILE",
-                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                        f"(default: {DEFAULT_PRESET})")
+                   help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     p.add_argument("--gains", metavar="NAME|FILE",
                    help="controller gains: a TOML file or a course gain table (as in fly)")
     p.add_argument("--planner", metavar="NAME|SPEC",

@@ -15,7 +15,12 @@ from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
 from quadnav.trajectory.references import DURATION
-from quadnav.vehicle.params import DEFAULT_PRESET, VehicleParams, load_params, preset_names
+from quadnav.vehicle.params import (
+    DEFAULT_PRESET,
+    VehicleParams,
+    load_params,
+    vehicle_forms,
+)
 
 
 def add_timing_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,8 +48,7 @@ def add_duration_argument(parser: argparse.ArgumentParser) -> None:
 def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
     """--params NAME|FILE (the vehicle) and --gains FILE (the controller)."""
     parser.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
-                        help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                             f"(default: {DEFAULT_PRESET})")
+                        help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     parser.add_argument("--gains", metavar="NAME|FILE",
                         help="controller gains: a TOML file, or a course gain table ("
                              f"{', '.join(course_gain_names())}); keys it leaves out keep "

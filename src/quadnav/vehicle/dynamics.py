@@ -13,7 +13,9 @@ indices    name        meaning
 =========  ==========  ===================================================
 
 Forces: rotor thrust along body z, gravity, linear drag ``-R D R^T v`` (``D`` the body-frame
-drag coefficients) and an external world-frame force (wind, a push). A solid floor at
+drag coefficients), rotorpy's aerodynamics when the vehicle has them
+(:func:`aerodynamic_wrench`: rotor drag, parasitic drag, translational lift, the flapping
+moment) and an external world-frame force (wind, a push). A solid floor at
 ``floor_z`` holds the centre of mass up: on touching it, the vehicle stops sinking and
 sliding and its body rates stop; :func:`rk4_step` returns the speed it met the floor at.
 """
@@ -39,6 +41,22 @@ RATES = slice(10, 13)
 ROTORS = slice(13, 17)
 
 
+class Aerodynamics(NamedTuple):
+    """rotorpy's aerodynamic coefficients of a vehicle (see
+    :class:`~quadnav.vehicle.params.VehicleParams`), as plain numbers: compiled code reads
+    them fastest so."""
+
+    rotor_drag_x: float  # N/(rad/s)/(m/s), per rotor, body axes
+    rotor_drag_y: float
+    rotor_drag_z: float
+    parasitic_drag_x: float  # N/(m/s)^2, body axes
+    parasitic_drag_y: float
+    parasitic_drag_z: float
+    translational_lift: float  # N/(m/s)^2, per rotor
+    flapping: float  # N m/(rad/s)/(m/s), per rotor
+    modelled: bool  # whether any of them is not zero
+
+
 class VehicleArrays(NamedTuple):
     """:class:`~quadnav.vehicle.params.VehicleParams` as plain numbers and arrays, the form
     compiled code takes (see :func:`vehicle_arrays`)."""
@@ -56,6 +74,7 @@ class VehicleArrays(NamedTuple):
     mixer: np.ndarray  # (4, 4) wrench -> thrusts
     max_rotor_thrust: float
     half_size: np.ndarray  # (3,) half the collision box, m
+    aerodynamics: Aerodynamics
 
 
 def vehicle_arrays(params: VehicleParams) -> VehicleArrays:
@@ -65,7 +84,15 @@ def vehicle_arrays(params: VehicleParams) -> VehicleArrays:
         params.mass, np.array(params.inertia), params.thrust_coefficient,
         params.torque_coefficient, params.rotor_speed_max, params.motor_time_constant,
         np.array(params.drag), params.gravity, SPIN.copy(), allocation,
-        np.linalg.inv(allocation), params.max_rotor_thrust, 0.5 * np.array(params.body_size))
+        np.linalg.inv(allocation), params.max_rotor_thrust, 0.5 * np.array(params.body_size),
+        aerodynamic_coefficients(params))
+
+
+def aerodynamic_coefficients(params: VehicleParams) -> Aerodynamics:
+    """The aerodynamic coefficients of ``params`` as compiled code takes them."""
+    coefficients = [float(c) for c in (*params.rotor_drag, *params.parasitic_drag,
+                                       params.translational_lift, params.flapping)]
+    return Aerodynamics(*coefficients, any(c != 0 for c in coefficients))
 
 
 def hover_state(params: VehicleParams, position, yaw: float = 0.0) -> FloatArray:
@@ -73,8 +100,42 @@ def hover_state(params: VehicleParams, position, yaw: float = 0.0) -> FloatArray
     state = np.zeros(STATE_SIZE)
     state[POSITION] = position
     state[ATTITUDE] = quaternion.from_yaw(yaw)
-    state[ROTORS] = params.rotor_speed_max * math.sqrt(params.hover_command)
+    state[ROTORS] = params.hover_rotor_speed
     return state
+
+
+@njit(cache=True, inline="always")
+def aerodynamic_wrench(x: np.ndarray, ux: float, uy: float, uz: float, v: VehicleArrays
+                       ) -> tuple[float, float, float, float, float, float]:
+    """rotorpy's aerodynamics (its ``Multirotor.compute_body_wrench`` with ``aero=True``)
+    for the state ``x`` (17,) and the body-frame airspeed ``(ux, uy, uz)`` m/s: the force
+    (N) and the torque about the centre (N m), in body axes, besides the rotors' thrust and
+    yaw torque. Rotor ``i`` at ``r_i`` (in the body's x-y plane) spinning at ``w_i`` meets
+    the airspeed ``h = u + w x r_i`` at its hub, there the rotor drag ``-w_i
+    diag(rotor_drag) h`` and the translational lift ``translational_lift (h_x^2 + h_y^2)``
+    along body z act, and it twists the body by the flapping moment ``-flapping w_i
+    (h x e_z)``; the parasitic drag ``-|u| diag(parasitic_drag) u`` acts at the centre."""
+    a = v.aerodynamics
+    speed = math.sqrt(ux * ux + uy * uy + uz * uz)
+    fx = -speed * a.parasitic_drag_x * ux
+    fy = -speed * a.parasitic_drag_y * uy
+    fz = -speed * a.parasitic_drag_z * uz
+    mx, my, mz = 0.0, 0.0, 0.0
+    wx, wy, wz = x[10], x[11], x[12]
+    for i in range(4):
+        px, py = -v.allocation[2, i], v.allocation[1, i]  # the hub, m
+        hx, hy, hz = ux - wz * py, uy + wz * px, uz + wx * py - wy * px
+        spin = x[13 + i]
+        hub_x = -spin * a.rotor_drag_x * hx
+        hub_y = -spin * a.rotor_drag_y * hy
+        hub_z = -spin * a.rotor_drag_z * hz + a.translational_lift * (hx * hx + hy * hy)
+        fx += hub_x
+        fy += hub_y
+        fz += hub_z
+        mx += py * hub_z - a.flapping * spin * hy
+        my += -px * hub_z + a.flapping * spin * hx
+        mz += px * hub_y - py * hub_x
+    return fx, fy, fz, mx, my, mz
 
 
 @njit(cache=True)
@@ -87,14 +148,22 @@ def derivative(x: np.ndarray, rotor_command: np.ndarray, v: VehicleArrays,
     r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
     r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
     r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
-    # drag: body-frame coefficients on the body-frame velocity, back to the world frame
-    dx = v.drag[0] * (r00 * x[3] + r10 * x[4] + r20 * x[5])
-    dy = v.drag[1] * (r01 * x[3] + r11 * x[4] + r21 * x[5])
-    dz = v.drag[2] * (r02 * x[3] + r12 * x[4] + r22 * x[5])
+    ux = r00 * x[3] + r10 * x[4] + r20 * x[5]  # the airspeed in body axes
+    uy = r01 * x[3] + r11 * x[4] + r21 * x[5]
+    uz = r02 * x[3] + r12 * x[4] + r22 * x[5]
+    # body-frame forces besides the thrust (and torques besides the rotors'): rotorpy's
+    # aerodynamics, if the vehicle has them (asked here, not in the function: that way
+    # round, the loop of a vehicle without them ran a quarter slower), and the linear drag
+    fx, fy, fz, mx, my, mz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if v.aerodynamics.modelled:
+        fx, fy, fz, mx, my, mz = aerodynamic_wrench(x, ux, uy, uz, v)
+    fx -= v.drag[0] * ux
+    fy -= v.drag[1] * uy
+    fz -= v.drag[2] * uz
     total = 0.0
-    tau_x = 0.0
-    tau_y = 0.0
-    tau_z = 0.0
+    tau_x = mx
+    tau_y = my
+    tau_z = mz
     for i in range(4):
         squared = x[13 + i] * x[13 + i]
         thrust = v.thrust_coefficient * squared
@@ -104,9 +173,10 @@ def derivative(x: np.ndarray, rotor_command: np.ndarray, v: VehicleArrays,
         tau_z -= v.spin[i] * v.torque_coefficient * squared
         out[13 + i] = (rotor_command[i] - x[13 + i]) / v.motor_time_constant
     out[0], out[1], out[2] = x[3], x[4], x[5]
-    out[3] = (r02 * total - (r00 * dx + r01 * dy + r02 * dz) + force[0]) / v.mass
-    out[4] = (r12 * total - (r10 * dx + r11 * dy + r12 * dz) + force[1]) / v.mass
-    out[5] = (r22 * total - (r20 * dx + r21 * dy + r22 * dz) + force[2]) / v.mass - v.gravity
+    fz += total
+    out[3] = (r00 * fx + r01 * fy + r02 * fz + force[0]) / v.mass
+    out[4] = (r10 * fx + r11 * fy + r12 * fz + force[1]) / v.mass
+    out[5] = (r20 * fx + r21 * fy + r22 * fz + force[2]) / v.mass - v.gravity
     out[6] = 0.5 * (-qx * wx - qy * wy - qz * wz)
     out[7] = 0.5 * (qw * wx + qy * wz - qz * wy)
     out[8] = 0.5 * (qw * wy - qx * wz + qz * wx)
