@@ -54,6 +54,7 @@ class Disturbances(NamedTuple):
     """What acts on the flight besides the controller, per control step."""
 
     forces: np.ndarray  # (K, 3) external force, N
+    wind: np.ndarray  # (K, 3) the wind's velocity, m/s: the drag acts on the airspeed
     noise: np.ndarray  # (K, 12) measurement noise (see _measured)
     noisy: bool  # whether to add the noise (skipped when all zero)
 
@@ -87,8 +88,9 @@ def scene(world: World | None, half_size: np.ndarray, tolerance: float = 0.0,
 
 
 def still_air(steps: int) -> Disturbances:
-    """No force and no sensor noise over ``steps`` control steps."""
-    return Disturbances(np.zeros((steps, 3)), np.zeros((steps, 12)), False)
+    """No force, no wind and no sensor noise over ``steps`` control steps."""
+    return Disturbances(np.zeros((steps, 3)), np.zeros((steps, 3)), np.zeros((steps, 12)),
+                        False)
 
 
 def new_record(steps: int, every: int = 1) -> Record:
@@ -168,7 +170,7 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         dt_control: control period, s.
         where: the boundary, blocks and floor, and where the floor may be met
             (:func:`scene`).
-        acting: forces and sensor noise per control step.
+        acting: forces, wind and sensor noise per control step.
         record: where the states, commands and statistics go (:func:`new_record`).
     """
     dt = dt_control / substeps
@@ -196,7 +198,8 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
             for i in range(len(commands)):
                 record.commands[row, i] = commands[i]
         for _ in range(substeps):
-            speed = rk4_step(state, commands, v, acting.forces[k], dt, where.floor_z, work)
+            speed = rk4_step(state, commands, v, acting.forces[k], acting.wind[k], dt,
+                             where.floor_z, work)
             code = _stop_code(state, v, where, stats)
             if code == RUNNING and speed >= 0.0:
                 code = touchdown(speed, reference, where, stats)
