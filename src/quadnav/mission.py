@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
@@ -79,8 +79,11 @@ class MissionSettings:
             holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the cascade's gains (the PX4-style controller).
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
-            ``cascade``, ``se3`` or one registered).
+        controller: the controller by name or spec
+            (:func:`~quadnav.control.registry.make_controller`: ``cascade``, ``se3``, one
+            registered, or ``module:NAME`` / ``path/to/file.py:NAME`` with keyword
+            arguments, a compiled controller's factory or a plain-Python controller's
+            class).
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
@@ -102,8 +105,8 @@ class MissionSettings:
     plant: VehicleParams | None = None
 
     def __post_init__(self) -> None:
-        factory = CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
-        check_control_rate(factory(self.gains), self.flown_vehicle, self.sim.control_rate)
+        controller = make_controller(self.controller, self.gains, self.vehicle)
+        check_control_rate(controller, self.flown_vehicle, self.sim.control_rate)
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -332,7 +335,8 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     timings["trajectory"] = time.perf_counter() - began
     flight = simulate(trajectory, settings.flown_vehicle, settings.gains, world, settings.sim,
                       flight_progress, model=settings.vehicle,
-                      controller=CONTROLLERS.get(settings.controller)(settings.gains))
+                      controller=make_controller(settings.controller, settings.gains,
+                                                 settings.vehicle))
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
 

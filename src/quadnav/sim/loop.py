@@ -55,7 +55,7 @@ class Disturbances(NamedTuple):
 
     forces: np.ndarray  # (K, 3) external force, N
     wind: np.ndarray  # (K, 3) the wind's velocity, m/s: the drag acts on the airspeed
-    noise: np.ndarray  # (K, 12) measurement noise (see _measured)
+    noise: np.ndarray  # (K, 12) measurement noise (see measured)
     noisy: bool  # whether to add the noise (skipped when all zero)
 
 
@@ -103,7 +103,7 @@ def new_record(steps: int, every: int = 1) -> Record:
 
 
 @njit(cache=True)
-def _measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
+def measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """The state as the sensors see it: noise (12,) on position, velocity, attitude
     (a small rotation) and body rates."""
     out = state.copy()
@@ -178,7 +178,7 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
     last_reference = references.shape[0] - 1
     for k in range(first, last):
         reference = references[min(k, last_reference)]
-        seen = _measured(state, acting.noise[k]) if acting.noisy else state
+        seen = measured(state, acting.noise[k]) if acting.noisy else state
         commands = step(memory, seen, reference, g, model, dt_control)
         error = 0.0
         velocity_error = 0.0
