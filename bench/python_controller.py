@@ -6,8 +6,10 @@ Run: ``python bench/python_controller.py [--repeats 5]``, or ``--quick`` for a s
 
 The flight: the built-in ``helix:radius=1,speed=1`` (13.7 s, plus 2 s settling) from a hover
 at its start, on the Tello without drag (rotorpy's SE3Control knows none), physics at 1 kHz.
-Each row is :func:`quadnav.sim.simulate.simulate` after a warm-up flight (numba's loading
-or compiling is not counted: the flight's ``wall_time``), on one numba thread:
+Each row times whole calls of :func:`quadnav.sim.simulate.simulate` (sampling the
+reference, loading the loop, the flight) in CPU seconds of this process, after a warm-up
+flight (numba's compiling or loading from its cache), on one numba thread; CPU time, not
+wall time, so that other work on a shared machine does not count:
 
 * compiled: quadnav's SE(3) controller with rotorpy's gains (kp_att 310, kd_att 57), the
   whole flight in one call of the compiled loop;
@@ -20,9 +22,9 @@ or compiling is not counted: the flight's ``wall_time``), on one numba thread:
   by motor speeds at 1 kHz and at 200 Hz (``--control-rate``), the same law as the
   compiled row: their flights agree (the RMS tracking errors are printed).
 
-Printed per row: control steps per second (median over the repeats), the real-time factor
-(simulated s / wall s) and the compiled row's steps per second over this row's. Nothing is
-asserted.
+Printed per row: control steps per CPU second (median over the repeats), the real-time
+factor (simulated s / CPU s) and the compiled row's steps per second over this row's.
+Nothing is asserted.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import argparse
 import statistics
 import sys
 import tempfile
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -70,16 +73,17 @@ class Fixed:
 
 
 def flights(reference, controller: Callable[[], Controller], settings: SimSettings,
-            repeats: int) -> list[Flight]:
-    """``repeats`` flights of ``reference`` after a warm-up one, each with a new controller."""
+            repeats: int) -> list[tuple[Flight, float]]:
+    """``repeats`` flights of ``reference`` after a warm-up one, each with a new controller,
+    with the CPU seconds of each whole :func:`simulate` call."""
     simulate(reference, VEHICLE, settings=settings, controller=controller())
-    return [simulate(reference, VEHICLE, settings=settings, controller=controller())
-            for _ in range(repeats)]
-
-
-def steps_per_second(flown: list[Flight], rate: float) -> float:
-    """Median control steps per wall second of the flights' loops."""
-    return statistics.median(f.duration * rate / f.wall_time for f in flown)
+    flown = []
+    for _ in range(repeats):
+        flying = controller()
+        began = time.process_time()
+        flight = simulate(reference, VEHICLE, settings=settings, controller=flying)
+        flown.append((flight, time.process_time() - began))
+    return flown
 
 
 def main() -> None:
@@ -124,16 +128,15 @@ def main() -> None:
     for name, calls, controller, settings in rows:
         print(f"  {name}, {settings.control_rate:g} Hz", file=sys.stderr, flush=True)
         flown = flights(reference, controller, settings, repeats)
-        measured.append((name, calls, settings.control_rate,
-                         steps_per_second(flown, settings.control_rate),
-                         statistics.median(f.duration / f.wall_time for f in flown),
-                         flown[-1].rms_tracking_error))
+        steps = statistics.median(f.duration * settings.control_rate / cpu for f, cpu in flown)
+        measured.append((name, calls, settings.control_rate, steps,
+                         steps / settings.control_rate, flown[-1][0].rms_tracking_error))
     best = measured[0][3]
     print(f"flight: {spec} ({reference.duration:.1f} s + {fast.settle_time:g} s settling), "
           f"{VEHICLE.name}, physics 1 kHz; median of {repeats} flights after a warm-up; "
           f"numba threads {numba.get_num_threads()}\n")
     print(table(["controller", "calls of the compiled loop", "control rate Hz",
-                 "control steps / s", "real-time factor", "compiled one call / this",
+                 "control steps / CPU s", "real-time factor", "compiled one call / this",
                  "RMS error mm"],
                 [[name, calls, f"{rate:g}", f"{steps:,.0f}", f"{factor:.1f}x",
                   f"{best / steps:.0f}x", f"{rms * 1e3:.2f}"]
