@@ -5,6 +5,7 @@ and reported as a compiled one is."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -221,3 +222,24 @@ def test_what_is_not_a_controller_is_refused_before_it_flies(text, words):
     with pytest.raises(QuadnavError) as caught:
         MissionSettings(controller=text)
     assert str(caught.value) == f"controller {text}: {words}"
+
+
+def test_gains_tune_the_inner_loops_a_python_controller_flies_through(controllers, tmp_path):
+    """--gains reaches the cascade's rate loop that RateCommands' body rates go through."""
+    def flown(*flags: str) -> dict:
+        result = run_here("track", "helix:radius=1,speed=1", "--controller",
+                          f"{controllers}:RateCommands", "--control-rate", "250", *flags,
+                          "--no-figures", "--quiet", "-o", tmp_path / "out")
+        assert result.returncode == 0, result.stderr
+        return {name: json.loads((tmp_path / "out" / name).read_text())
+                for name in ("metrics.json", "parameters.json")}
+
+    slow = tmp_path / "slow_rates.toml"
+    slow.write_text("[rate]\nkp = [15.0, 15.0, 15.0]\n")  # the tello's: 40, 40, 15
+    tuned, default = flown("--gains", str(slow)), flown()
+    assert tuned["parameters.json"]["gains"]["rate"]["kp"] == [15.0, 15.0, 15.0]
+    error = [run["metrics.json"]["rms_tracking_error_m"] for run in (tuned, default)]
+    assert abs(error[0] - error[1]) > 1e-4
+    result = run_here("track", "hover", "--controller", "se3", "--gains", str(slow),
+                      "-o", tmp_path / "se3")
+    assert result.returncode == 2 and result.stderr.startswith("quadnav: error: --gains sets")

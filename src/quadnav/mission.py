@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
-from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
@@ -83,7 +83,7 @@ class MissionSettings:
             (:func:`~quadnav.control.registry.make_controller`: ``cascade``, ``se3``, one
             registered, or ``module:NAME`` / ``path/to/file.py:NAME`` with keyword
             arguments, a compiled controller's factory or a plain-Python controller's
-            class).
+            class, loaded and checked here and built afresh for each flight).
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
@@ -105,8 +105,9 @@ class MissionSettings:
     plant: VehicleParams | None = None
 
     def __post_init__(self) -> None:
-        controller = make_controller(self.controller, self.gains, self.vehicle)
-        check_control_rate(controller, self.flown_vehicle, self.sim.control_rate)
+        if controller_class(self.controller) is None:  # a compiled one: is its rate stable?
+            controller = make_controller(self.controller, self.gains, self.vehicle)
+            check_control_rate(controller, self.flown_vehicle, self.sim.control_rate)
 
     @property
     def flown_vehicle(self) -> VehicleParams:

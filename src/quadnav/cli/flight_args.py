@@ -9,7 +9,7 @@ import argparse
 
 from quadnav.cli.args import number_in
 from quadnav.control.gains import Gains, course_gain_names, load_gains
-from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class
 from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
@@ -56,17 +56,16 @@ def add_controller_argument(parser: argparse.ArgumentParser) -> None:
 
 def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:
     """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here);
-    the controller of ``--controller`` is built once with them, so that a bad one is
-    refused before any work."""
+    the controller of ``--controller`` is loaded and checked here (not built), so that a
+    bad one is refused before any work."""
     name = getattr(args, "controller", DEFAULT_CONTROLLER)
-    vehicle = load_params(args.params)
-    gains = load_gains(args.gains, vehicle.gains)
-    controller = make_controller(name, gains, vehicle)
-    if args.gains is not None and name != DEFAULT_CONTROLLER and controller.python is None:
+    python = controller_class(name) is not None
+    if args.gains is not None and name != DEFAULT_CONTROLLER and not python:
         raise QuadnavError(f"--gains sets the cascade's gains (and the inner loops a "
                            f"plain-Python controller flies through); --controller {name} "
                            "flies with its own")
-    return vehicle, gains
+    vehicle = load_params(args.params)
+    return vehicle, load_gains(args.gains, vehicle.gains)
 
 
 def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:

@@ -68,20 +68,31 @@ _EXPECTED = ("cmd_motor_speeds, cmd_motor_thrusts, cmd_thrust with cmd_moment, c
              "cmd_w, or cmd_v")
 
 
-def python_controller(text: str, cls: type, kwargs: Mapping[str, Any], vehicle: VehicleParams,
-                      gains: Gains | None = None) -> Controller:
-    """The controller class ``cls``, named by the spec ``text`` with keyword arguments
-    ``kwargs``, built with ``vehicle``'s parameter dict, as a
-    :class:`~quadnav.control.contract.Controller` whose inner loops have the cascade's
-    ``gains``. QuadnavError (exit code 2) when it cannot be used."""
-    arguments = dict(kwargs)
-    abstraction = arguments.pop(ABSTRACTION_KEYWORD, getattr(cls, ABSTRACTION_KEYWORD, None))
+def checked_abstraction(text: str, cls: type, kwargs: Mapping[str, Any]) -> str | None:
+    """The control abstraction that the controller class ``cls``, named by the spec ``text``
+    with keyword arguments ``kwargs``, flies by (None: chosen from its first ``update``),
+    once it is checked to be a controller. QuadnavError (exit code 2) for a class without
+    ``update`` or an unknown abstraction."""
+    abstraction = kwargs.get(ABSTRACTION_KEYWORD, getattr(cls, ABSTRACTION_KEYWORD, None))
     if abstraction is not None and abstraction not in ABSTRACTIONS:
         raise QuadnavError(f"controller {text}: {ABSTRACTION_KEYWORD} must be one of "
                            f"{', '.join(ABSTRACTIONS)}, got {abstraction!r}")
     if not callable(getattr(cls, "update", None)):
         raise QuadnavError(f"controller {text}: {cls.__name__} has no method "
                            "update(t, state, flat_output)")
+    return abstraction
+
+
+def python_controller(text: str, cls: type, kwargs: Mapping[str, Any], vehicle: VehicleParams,
+                      gains: Gains | None = None) -> Controller:
+    """The controller class ``cls``, named by the spec ``text`` with keyword arguments
+    ``kwargs``, built with ``vehicle``'s parameter dict, as a
+    :class:`~quadnav.control.contract.Controller` whose inner loops have the cascade's
+    ``gains``. QuadnavError (exit code 2) when it cannot be used (see
+    :func:`checked_abstraction`; a constructor that raises is a
+    :class:`~quadnav.plugins.PluginError` with its traceback)."""
+    abstraction = checked_abstraction(text, cls, kwargs)
+    arguments = {key: value for key, value in kwargs.items() if key != ABSTRACTION_KEYWORD}
     try:
         instance = cls(rotorpy_params(vehicle), **arguments)
     except Exception as error:

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from quadnav.control.cascade import cascade_controller
 from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
-from quadnav.control.python_controller import python_controller
+from quadnav.control.python_controller import checked_abstraction, python_controller
 from quadnav.control.se3 import se3_controller
 from quadnav.errors import QuadnavError
 from quadnav.plugins import PluginError, Registry, user_traceback
@@ -35,6 +35,22 @@ CONTROLLERS: Registry[ControllerFactory] = Registry(
     {"cascade": cascade_controller, "se3": lambda gains: se3_controller()})
 #: The controller used when none is named.
 DEFAULT_CONTROLLER = "cascade"
+
+
+def controller_class(text: str) -> type | None:
+    """The plain-Python controller's class that ``text`` names, loaded and checked (it has
+    ``update`` and a known control abstraction) but not built, or None when ``text`` names a
+    compiled controller's factory.
+
+    Raises:
+        QuadnavError: an unknown name, a spec that cannot be loaded, a class that is not a
+            controller (:func:`~quadnav.control.python_controller.checked_abstraction`).
+    """
+    found, kwargs = CONTROLLERS.load(text)
+    if not isinstance(found, type):
+        return None
+    checked_abstraction(text, found, kwargs)
+    return found
 
 
 def make_controller(text: str, gains: Gains, vehicle: VehicleParams) -> Controller:
