@@ -83,6 +83,15 @@ class WindTwo:
         return np.zeros(2)
 
 
+class WindBadInit:
+    def __init__(self, speed=-1.0):
+        if speed < 0:
+            raise ValueError(f"a wind speed is at least 0 m/s, got {speed}")
+
+    def update(self, t, position):
+        return np.zeros(3)
+
+
 class WindRaises:
     def update(self, t, position):
         raise RuntimeError(f"no wind at {position[2]:.1f} m")
@@ -140,6 +149,8 @@ def test_a_plugin_that_is_wrong_is_one_line_naming_its_file(plugins, tmp_path, f
      "zero", "return 1 / 0"),
     ("--controller", "BadInit", 2, "KeyError while building it: 'weight'",
      'self.mass = quad_params["weight"]'),
+    ("--wind", "WindBadInit", 2, "ValueError while building it: a wind speed is at least "
+     "0 m/s, got -1.0", 'raise ValueError(f"a wind speed is at least 0 m/s, got {speed}")'),
     ("--wind", "WindRaises", 1, "RuntimeError in update at t = 0.000 s: no wind at 1.0 m",
      'raise RuntimeError(f"no wind at {position[2]:.1f} m")'),
 ])

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from quadnav.arrays import FloatArray
 from quadnav.config import frozen_vector, require, vector_field
 from quadnav.limits import FORCE, GUSTS, RATE, SEED, SETTLE
-from quadnav.sim.wind import load_wind
+from quadnav.sim.wind import wind_maker
 
 
 @dataclass(frozen=True, eq=False)
@@ -39,7 +39,8 @@ class SimSettings:
         wind_model: a wind model named by its spec (:mod:`quadnav.sim.wind`:
             ``module:Class(key=value, ...)`` or ``path/to/file.py:Class``), whose wind
             velocity, m/s, the drag acts on, asked once per control step; None for still
-            air. Loaded and built here once, so that a bad one is refused up front.
+            air. Loaded and checked here (not built), so that a bad one is refused up
+            front; each flight builds its own.
         gust_std: standard deviation of a random external force per axis, N
             (:data:`~quadnav.limits.GUSTS`), redrawn every ``gust_period`` s.
         gust_period: s.
@@ -77,7 +78,7 @@ class SimSettings:
         for force in self.wind:
             FORCE.check(float(force), "wind")
         if self.wind_model is not None:
-            load_wind(self.wind_model)
+            wind_maker(self.wind_model)
         ratio = self.physics_rate / self.control_rate
         nonnegative = ("boundary_tolerance", "position_noise", "velocity_noise",
                        "attitude_noise", "gyro_noise")

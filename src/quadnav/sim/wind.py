@@ -18,6 +18,7 @@ without ``update``, or one whose constructor raises, cannot be used (exit code 2
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -59,18 +60,30 @@ class WindModel:
         return wind
 
 
+def wind_maker(text: str) -> tuple[Callable[..., Any], Mapping[str, Any]]:
+    """What builds the wind model ``text`` names (its class, or a function) and the keyword
+    arguments to build it with, loaded and checked but not built.
+
+    Raises:
+        QuadnavError: an unknown name, a spec that cannot be loaded, a class without
+            ``update``.
+    """
+    found, kwargs = WINDS.load(text)
+    if isinstance(found, type) and not callable(getattr(found, "update", None)):
+        raise QuadnavError(f"wind {text}: {found.__name__} has no method update(t, position)")
+    return found, kwargs
+
+
 def load_wind(text: str) -> WindModel:
     """The wind model ``text`` names, built with its keyword arguments (a new one on every
     call: its state starts afresh).
 
     Raises:
-        QuadnavError: an unknown name, a spec that cannot be loaded, a class or object
-            without ``update``; a :class:`~quadnav.plugins.PluginError` with the traceback
-            when building it raised.
+        QuadnavError: as :func:`wind_maker`, or an object built without ``update``; a
+            :class:`~quadnav.plugins.PluginError` with the traceback when building it
+            raised.
     """
-    found, kwargs = WINDS.load(text)
-    if isinstance(found, type) and not callable(getattr(found, "update", None)):
-        raise QuadnavError(f"wind {text}: {found.__name__} has no method update(t, position)")
+    found, kwargs = wind_maker(text)
     try:
         model = found(**kwargs)
     except Exception as error:
