@@ -117,23 +117,24 @@ def error_lines(stderr: str) -> list[str]:
 
 @pytest.mark.parametrize(("flag", "name", "code", "words"), [
     ("--controller", "NoUpdate", 2, "NoUpdate has no method update(t, state, flat_output)"),
-    ("--controller", "WrongKeys", 1, "update returned thrust, moment at t = 0.000 s, "
+    ("--controller", "WrongKeys", 1, "update(0, state, flat_output) returned thrust, moment: "
      "expected the commands of a control abstraction: cmd_motor_speeds, cmd_motor_thrusts, "
      "cmd_thrust with cmd_moment, cmd_q or cmd_w, or cmd_v"),
-    ("--controller", "NotADict", 1, "update returned list at t = 0.000 s, expected a dict "
-     "of commands: cmd_motor_speeds, cmd_motor_thrusts, cmd_thrust with cmd_moment, cmd_q "
-     "or cmd_w, or cmd_v"),
-    ("--controller", "ThreeRotors", 1, "update returned cmd_motor_speeds of 3 number(s) at "
-     "t = 0.000 s, expected 4"),
-    ("--controller", "KeysVanish", 1, "update returned no cmd_motor_speeds at t = 0.250 s "
-     "(flying by cmd_motor_speeds: cmd_motor_speeds)"),
-    ("--controller", "GoesNaN", 1, "update returned a non-finite cmd_motor_speeds at "
-     "t = 0.500 s: [nan nan nan nan]"),
+    ("--controller", "NotADict", 1, "update(0, state, flat_output) returned list: expected a "
+     "dict of commands: cmd_motor_speeds, cmd_motor_thrusts, cmd_thrust with cmd_moment, "
+     "cmd_q or cmd_w, or cmd_v"),
+    ("--controller", "ThreeRotors", 1, "update(0, state, flat_output) returned "
+     "cmd_motor_speeds of 3 number(s): expected 4"),
+    ("--controller", "KeysVanish", 1, "update(0.25, state, flat_output) returned no "
+     "cmd_motor_speeds (it gave cmd_motor_thrusts): flying by cmd_motor_speeds, expected "
+     "cmd_motor_speeds"),
+    ("--controller", "GoesNaN", 1, "update(0.5, state, flat_output) returned a non-finite "
+     "cmd_motor_speeds: [nan nan nan nan]"),
     ("--wind", "WindNoUpdate", 2, "WindNoUpdate has no method update(t, position)"),
-    ("--wind", "WindNaN", 1, "update returned array([nan,  0.,  0.]) at t = 0.200 s, "
-     "expected the wind's velocity: 3 finite numbers, m/s"),
-    ("--wind", "WindTwo", 1, "update returned array([0., 0.]) at t = 0.000 s, expected the "
-     "wind's velocity: 3 finite numbers, m/s"),
+    ("--wind", "WindNaN", 1, "update(0.2, position) returned '[nan  0.  0.]': expected the "
+     "wind's velocity, 3 finite numbers, m/s"),
+    ("--wind", "WindTwo", 1, "update(0, position) returned '[0. 0.]': expected the wind's "
+     "velocity, 3 finite numbers, m/s"),
 ])
 def test_a_plugin_that_is_wrong_is_one_line_naming_its_file(plugins, tmp_path, flag, name,
                                                             code, words):
@@ -145,13 +146,13 @@ def test_a_plugin_that_is_wrong_is_one_line_naming_its_file(plugins, tmp_path, f
 
 
 @pytest.mark.parametrize(("flag", "name", "code", "words", "line"), [
-    ("--controller", "Raises", 1, "ZeroDivisionError in update at t = 0.300 s: division by "
-     "zero", "return 1 / 0"),
-    ("--controller", "BadInit", 2, "KeyError while building it: 'weight'",
+    ("--controller", "Raises", 1, "update(0.3, state, flat_output) raised ZeroDivisionError: "
+     "division by zero", "return 1 / 0"),
+    ("--controller", "BadInit", 2, "building it raised KeyError: 'weight'",
      'self.mass = quad_params["weight"]'),
-    ("--wind", "WindBadInit", 2, "ValueError while building it: a wind speed is at least "
+    ("--wind", "WindBadInit", 2, "building it raised ValueError: a wind speed is at least "
      "0 m/s, got -1.0", 'raise ValueError(f"a wind speed is at least 0 m/s, got {speed}")'),
-    ("--wind", "WindRaises", 1, "RuntimeError in update at t = 0.000 s: no wind at 1.0 m",
+    ("--wind", "WindRaises", 1, "update(0, position) raised RuntimeError: no wind at 1.0 m",
      'raise RuntimeError(f"no wind at {position[2]:.1f} m")'),
 ])
 def test_a_plugin_that_raises_shows_its_own_traceback_once_above_the_line(

@@ -28,12 +28,11 @@ from pathlib import Path
 from types import MappingProxyType, ModuleType
 from typing import Any, Generic, TypeVar
 
+import numpy as np
+
 from quadnav.errors import QuadnavError
 
 Plugin = TypeVar("Plugin", bound=Callable)
-#: :attr:`PluginError.exit_code` of a flight that failed because of a plug-in (one that
-#: raised or returned something unusable while it flew).
-FLIGHT_FAILED = 1
 #: quadnav's own folder: frames in it are left out of a plug-in's traceback.
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -245,3 +244,33 @@ def user_traceback(error: BaseException) -> str | None:
         return None
     lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames), *only]
     return "".join(lines).rstrip("\n")
+
+
+def literal_arrays(kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """``kwargs`` with every non-empty list or tuple of numbers (nested to any depth, as
+    long as it is rectangular) turned into a float64 numpy array: the form numerical code,
+    rotorpy's classes among it, does arithmetic on (``2 * np.pi * freq``). Other values are
+    passed as they are."""
+    return {key: np.array(value, dtype=np.float64) if _numbers(value) else value
+            for key, value in kwargs.items()}
+
+
+def _numbers(value: Any) -> bool:
+    """Whether ``value`` is a non-empty, rectangular list or tuple of numbers (not bools),
+    nested to any depth."""
+    if not isinstance(value, list | tuple) or not value:
+        return False
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return True
+    return (all(_numbers(v) for v in value)
+            and len({np.shape(v) for v in value}) == 1)
+
+
+def raised_in(kind: str, text: str, where: str | None, error: Exception,
+              exit_code: int = 1) -> PluginError:
+    """The :class:`PluginError` for ``error``, raised by the plug-in ``text`` (in ``where``,
+    e.g. ``"update(0.5)"``, when given), with its own traceback: exit 1 by default, a
+    flight or plan that failed because of the plug-in."""
+    place = f": {where}" if where else ""
+    return PluginError(f"{kind} {text}{place} raised {type(error).__name__}: {error}",
+                       details=user_traceback(error), exit_code=exit_code)

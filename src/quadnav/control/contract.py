@@ -22,7 +22,7 @@ A controller is one compiled step (a numba ``@njit`` function)::
 ``examples/custom_controller.py`` is a template, :mod:`quadnav.control.cascade` and
 :mod:`quadnav.control.se3` are the built-in ones (``--controller``).
 
-A plain-Python controller (:mod:`quadnav.control.python_controller`) is a Controller too:
+A plain-Python controller (:mod:`quadnav.control.plain`) is a Controller too:
 its compiled step (:mod:`quadnav.control.held`) flies the commands that its Python side
 (:class:`PythonSide`) holds in its memory, set before each control step; the closed loop
 then runs one control step per call (:func:`quadnav.sim.simulate.simulate`).

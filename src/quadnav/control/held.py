@@ -1,5 +1,5 @@
 """A compiled controller that flies the commands held in its memory through quadnav's own
-inner loops: how a plain-Python controller (:mod:`.python_controller`) flies in the
+inner loops: how a plain-Python controller (:mod:`.plain`) flies in the
 compiled closed loop.
 
 Before each control step the Python side writes a command mode and its numbers into the

@@ -11,7 +11,7 @@ Either kind is named, configured and reported the same way (:func:`make_controll
   :class:`~quadnav.control.gains.Gains` (what ``--gains`` and the vehicle presets set; a
   controller with gains of its own ignores them);
 - a plain-Python controller's class, in rotorpy's shape (a class with
-  ``update(t, state, flat_output)``, :mod:`quadnav.control.python_controller`).
+  ``update(t, state, flat_output)``, :mod:`quadnav.control.plain`).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from collections.abc import Callable
 from quadnav.control.cascade import cascade_controller
 from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
-from quadnav.control.python_controller import checked_abstraction, python_controller
+from quadnav.control.plain import checked_abstraction, plain_controller
 from quadnav.control.se3 import se3_controller
 from quadnav.errors import QuadnavError
-from quadnav.plugins import PluginError, Registry, user_traceback
+from quadnav.plugins import Registry, literal_arrays, raised_in
 from quadnav.vehicle.params import VehicleParams
 
 #: ``factory(gains) -> Controller``, or a plain-Python controller's class.
@@ -44,7 +44,7 @@ def controller_class(text: str) -> type | None:
 
     Raises:
         QuadnavError: an unknown name, a spec that cannot be loaded, a class that is not a
-            controller (:func:`~quadnav.control.python_controller.checked_abstraction`).
+            controller (:func:`~quadnav.control.plain.checked_abstraction`).
     """
     found, kwargs = CONTROLLERS.load(text)
     if not isinstance(found, type):
@@ -68,12 +68,11 @@ def make_controller(text: str, gains: Gains, vehicle: VehicleParams) -> Controll
     """
     found, kwargs = CONTROLLERS.load(text)
     if isinstance(found, type):
-        return python_controller(text, found, kwargs, vehicle, gains)
+        return plain_controller(text, found, kwargs, vehicle, gains)
     try:
-        controller = found(gains, **kwargs)
+        controller = found(gains, **literal_arrays(kwargs))
     except Exception as error:
-        raise PluginError(f"controller {text}: {type(error).__name__} while building it: "
-                          f"{error}", details=user_traceback(error)) from None
+        raise raised_in("controller", text, "building it", error, exit_code=2) from None
     if not isinstance(controller, Controller):
         raise QuadnavError(f"controller {text}: expected a class with update(t, state, "
                            "flat_output), or a function of the gains returning a "

@@ -1,5 +1,5 @@
 """quadnav's state and reference as rotorpy's dicts, the boundary a plain-Python controller
-sees (:mod:`quadnav.control.python_controller`).
+sees (:mod:`quadnav.control.plain`).
 
 rotorpy writes quaternions scalar last, ``(i, j, k, w)``; quadnav scalar first,
 ``(w, x, y, z)``. Every array handed over is a fresh copy, so a controller that changes one

@@ -13,7 +13,9 @@ holds it over the step; the vehicle's drag acts on its airspeed (its velocity le
 wind's, :mod:`quadnav.vehicle.dynamics`), beside the steady force and the gusts. A class
 without ``update``, or one whose constructor raises, cannot be used (exit code 2); an
 ``update`` that raises or returns anything but three finite numbers fails the flight
-(:class:`~quadnav.plugins.PluginError`, exit code :data:`~quadnav.plugins.FLIGHT_FAILED`).
+(:class:`~quadnav.plugins.PluginError`, exit code 1). The spec's keyword arguments reach
+the class with their lists of numbers as numpy arrays
+(:func:`~quadnav.plugins.literal_arrays`).
 """
 
 from __future__ import annotations
@@ -25,8 +27,10 @@ import numpy as np
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.plugins import FLIGHT_FAILED, PluginError, Registry, user_traceback
+from quadnav.plugins import PluginError, Registry, literal_arrays, raised_in
 
+#: What messages call a wind model.
+KIND = "wind"
 #: Wind models by name: none built in; registered ones and entry points.
 WINDS: Registry = Registry("wind", "quadnav.winds", {})
 
@@ -46,17 +50,19 @@ class WindModel:
     def at(self, t: float, position: FloatArray) -> FloatArray:
         """The wind's velocity (3,) m/s at ``t`` s at ``position`` (3,) m (a copy is
         handed over)."""
+        call = f"update({t:.6g}, position)"
         try:
             value = self.model.update(t, np.array(position, dtype=np.float64))
-            wind = np.asarray(value, dtype=np.float64).reshape(-1)
         except Exception as error:
-            raise PluginError(f"wind {self.text}: {type(error).__name__} in update at t = "
-                              f"{t:.3f} s: {error}", details=user_traceback(error),
-                              exit_code=FLIGHT_FAILED) from None
+            raise raised_in(KIND, self.text, call, error) from None
+        try:
+            wind = np.asarray(value, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            wind = np.empty(0)
         if wind.size != 3 or not np.all(np.isfinite(wind)):
-            raise PluginError(f"wind {self.text}: update returned {value!r} at t = {t:.3f} "
-                              "s, expected the wind's velocity: 3 finite numbers, m/s",
-                              exit_code=FLIGHT_FAILED)
+            raise PluginError(f"{KIND} {self.text}: {call} returned {str(value)[:40]!r}: "
+                              "expected the wind's velocity, 3 finite numbers, m/s",
+                              exit_code=1)
         return wind
 
 
@@ -70,7 +76,7 @@ def wind_maker(text: str) -> tuple[Callable[..., Any], Mapping[str, Any]]:
     """
     found, kwargs = WINDS.load(text)
     if isinstance(found, type) and not callable(getattr(found, "update", None)):
-        raise QuadnavError(f"wind {text}: {found.__name__} has no method update(t, position)")
+        raise QuadnavError(f"{KIND} {text}: {found.__name__} has no method update(t, position)")
     return found, kwargs
 
 
@@ -85,11 +91,10 @@ def load_wind(text: str) -> WindModel:
     """
     found, kwargs = wind_maker(text)
     try:
-        model = found(**kwargs)
+        model = found(**literal_arrays(kwargs))
     except Exception as error:
-        raise PluginError(f"wind {text}: {type(error).__name__} while building it: {error}",
-                          details=user_traceback(error)) from None
+        raise raised_in(KIND, text, "building it", error, exit_code=2) from None
     if not callable(getattr(model, "update", None)):
-        raise QuadnavError(f"wind {text}: it built {type(model).__name__}, which has no "
+        raise QuadnavError(f"{KIND} {text}: it built {type(model).__name__}, which has no "
                            "method update(t, position)")
     return WindModel(text, model)

@@ -2,7 +2,7 @@
 
 rotorpy (the UPenn simulator) builds a controller with a dict of the vehicle's parameters,
 keyed as in ``rotorpy/vehicles/crazyflie_params.py``; quadnav hands such a dict to a
-plain-Python controller (:mod:`quadnav.control.python_controller`), so that a controller
+plain-Python controller (:mod:`quadnav.control.plain`), so that a controller
 written for rotorpy runs unchanged. The rotors are listed in quadnav's order
 (:mod:`quadnav.vehicle.rotors`: 1 front-right, 2 back-left, 3 front-left, 4 back-right), so
 the per-rotor commands such a controller returns are in quadnav's order too.

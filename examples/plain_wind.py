@@ -7,9 +7,9 @@ A wind is a class built with keyword arguments of its own, with
 the vehicle's drag acts on its airspeed (its velocity less the wind's), beside the steady
 force and the gusts. Use this file as a template; the command line flies it too::
 
-    quadnav fly --wind "examples/python_wind.py:GustFront(speed=4.0)"
+    quadnav fly --wind "examples/plain_wind.py:GustFront(speed=4.0)"
 
-Run: python examples/python_wind.py [MAP]   (a map with its own start and goal; default:
+Run: python examples/plain_wind.py [MAP]   (a map with its own start and goal; default:
 the built-in forest)
 """
 

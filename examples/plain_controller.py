@@ -11,9 +11,9 @@ holds ``x``, ``x_dot``, ``x_ddot``, ``x_dddot``, ``x_ddddot``, ``yaw``, ``yaw_do
 ``cmd_moment`` (N m), ``cmd_q`` or ``cmd_w`` (rad/s), or ``cmd_v`` (m/s). Use this file as a
 template; the command line flies it too::
 
-    quadnav fly --controller "examples/python_controller.py:PDAttitude(kp=6.5, kd=4.0)"
+    quadnav fly --controller "examples/plain_controller.py:PDAttitude(kp=6.5, kd=4.0)"
 
-Run: python examples/python_controller.py [MAP]   (a map with its own start and goal;
+Run: python examples/plain_controller.py [MAP]   (a map with its own start and goal;
 default: the built-in forest)
 """
 

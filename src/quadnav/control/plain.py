@@ -18,9 +18,10 @@ flight then holds to it.
 A class without ``update``, or whose constructor raises, cannot be used (QuadnavError,
 :class:`~quadnav.plugins.PluginError` with its traceback, exit code 2). An ``update`` that
 raises, returns no dict, lacks the abstraction's keys or returns commands of the wrong size
-or not finite fails the flight (:class:`~quadnav.plugins.PluginError`, exit code
-:data:`~quadnav.plugins.FLIGHT_FAILED`): one line naming the controller's spec, the time
-and what was wrong, with the controller's own traceback when it raised.
+or not finite fails the flight (:class:`~quadnav.plugins.PluginError`, exit code 1): one
+line naming the controller's spec, the call (its time) and what was wrong, with the
+controller's own traceback when it raised. The spec's keyword arguments reach the class
+with their lists of numbers as numpy arrays (:func:`~quadnav.plugins.literal_arrays`).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from quadnav.control.held import (
 )
 from quadnav.control.rotorpy_shape import flat_outputs, quaternion_from_rotorpy, state_dict
 from quadnav.errors import QuadnavError
-from quadnav.plugins import FLIGHT_FAILED, PluginError, user_traceback
+from quadnav.plugins import PluginError, literal_arrays, raised_in
 from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotorpy_params import rotorpy_params
 
@@ -62,6 +63,8 @@ ABSTRACTIONS: dict[str, tuple[int, tuple[str, ...]]] = {
 #: How many numbers each command key holds.
 SIZES = {"cmd_motor_speeds": 4, "cmd_motor_thrusts": 4, "cmd_thrust": 1, "cmd_moment": 3,
          "cmd_q": 4, "cmd_w": 3, "cmd_v": 3}
+#: What messages call a controller.
+KIND = "controller"
 #: The keyword of a spec that quadnav takes as the control abstraction.
 ABSTRACTION_KEYWORD = "control_abstraction"
 _EXPECTED = ("cmd_motor_speeds, cmd_motor_thrusts, cmd_thrust with cmd_moment, cmd_q or "
@@ -75,15 +78,15 @@ def checked_abstraction(text: str, cls: type, kwargs: Mapping[str, Any]) -> str 
     ``update`` or an unknown abstraction."""
     abstraction = kwargs.get(ABSTRACTION_KEYWORD, getattr(cls, ABSTRACTION_KEYWORD, None))
     if abstraction is not None and abstraction not in ABSTRACTIONS:
-        raise QuadnavError(f"controller {text}: {ABSTRACTION_KEYWORD} must be one of "
+        raise QuadnavError(f"{KIND} {text}: {ABSTRACTION_KEYWORD} must be one of "
                            f"{', '.join(ABSTRACTIONS)}, got {abstraction!r}")
     if not callable(getattr(cls, "update", None)):
-        raise QuadnavError(f"controller {text}: {cls.__name__} has no method "
+        raise QuadnavError(f"{KIND} {text}: {cls.__name__} has no method "
                            "update(t, state, flat_output)")
     return abstraction
 
 
-def python_controller(text: str, cls: type, kwargs: Mapping[str, Any], vehicle: VehicleParams,
+def plain_controller(text: str, cls: type, kwargs: Mapping[str, Any], vehicle: VehicleParams,
                       gains: Gains | None = None) -> Controller:
     """The controller class ``cls``, named by the spec ``text`` with keyword arguments
     ``kwargs``, built with ``vehicle``'s parameter dict, as a
@@ -92,16 +95,16 @@ def python_controller(text: str, cls: type, kwargs: Mapping[str, Any], vehicle: 
     :func:`checked_abstraction`; a constructor that raises is a
     :class:`~quadnav.plugins.PluginError` with its traceback)."""
     abstraction = checked_abstraction(text, cls, kwargs)
-    arguments = {key: value for key, value in kwargs.items() if key != ABSTRACTION_KEYWORD}
+    arguments = literal_arrays({key: value for key, value in kwargs.items()
+                                if key != ABSTRACTION_KEYWORD})
     try:
         instance = cls(rotorpy_params(vehicle), **arguments)
     except Exception as error:
-        raise PluginError(f"controller {text}: {type(error).__name__} while building it: "
-                          f"{error}", details=user_traceback(error)) from None
-    return held_controller(text, PythonController(text, instance, abstraction), gains)
+        raise raised_in(KIND, text, "building it", error, exit_code=2) from None
+    return held_controller(text, PlainController(text, instance, abstraction), gains)
 
 
-class PythonController:
+class PlainController:
     """The Python side of a plain-Python controller
     (:class:`~quadnav.control.contract.PythonSide`): calls its ``update`` before each
     control step and holds what it returns for the compiled step.
@@ -122,58 +125,57 @@ class PythonController:
                     reference: FloatArray, jerk_snap: FloatArray, wind: FloatArray) -> None:
         """Call ``update`` and hold its commands in ``memory`` (see
         :class:`~quadnav.control.contract.PythonSide`)."""
+        call = f"update({t:.6g}, state, flat_output)"
         try:
             commands = self.controller.update(t, state_dict(state, wind),
                                               flat_outputs(reference, jerk_snap))
         except Exception as error:
-            raise self._failure(f"{type(error).__name__} in update at t = {t:.3f} s: {error}",
-                                user_traceback(error)) from None
-        mode, values = self._read(commands, t)
+            raise raised_in(KIND, self.text, call, error) from None
+        mode, values = self._read(commands, call)
         hold(memory, mode, values)
 
-    def _failure(self, what: str, details: str | None = None) -> PluginError:
-        return PluginError(f"controller {self.text}: {what}", details=details,
-                           exit_code=FLIGHT_FAILED)
+    def _failure(self, call: str, what: str) -> PluginError:
+        return PluginError(f"{KIND} {self.text}: {call} returned {what}", exit_code=1)
 
-    def _read(self, commands: object, t: float) -> tuple[int, FloatArray]:
-        """The command mode and numbers of what ``update`` returned at ``t`` s."""
-        at = f"at t = {t:.3f} s"
+    def _read(self, commands: object, call: str) -> tuple[int, FloatArray]:
+        """The command mode and numbers of what the ``call`` of ``update`` returned."""
         if not isinstance(commands, Mapping):
-            raise self._failure(f"update returned {type(commands).__name__} {at}, expected "
-                                f"a dict of commands: {_EXPECTED}")
+            raise self._failure(call, f"{type(commands).__name__}: expected a dict of "
+                                      f"commands: {_EXPECTED}")
         if self.abstraction is None:
             self.abstraction = next(
                 (name for name, (_, keys) in ABSTRACTIONS.items()
                  if all(key in commands for key in keys)), None)
             if self.abstraction is None:
                 got = ", ".join(map(str, commands)) or "nothing"
-                raise self._failure(f"update returned {got} {at}, expected the commands of "
-                                    f"a control abstraction: {_EXPECTED}")
+                raise self._failure(call, f"{got}: expected the commands of a control "
+                                          f"abstraction: {_EXPECTED}")
         mode, keys = ABSTRACTIONS[self.abstraction]
         missing = [key for key in keys if key not in commands]
         if missing:
-            raise self._failure(f"update returned no {' or '.join(missing)} {at} (flying "
-                                f"by {self.abstraction}: {' and '.join(keys)})")
-        values = [self._numbers(key, commands[key], at) for key in keys]
+            raise self._failure(call, f"no {' or '.join(missing)} (it gave "
+                                      f"{', '.join(map(str, commands)) or 'nothing'}): "
+                                      f"flying by {self.abstraction}, expected "
+                                      f"{' and '.join(keys)}")
+        values = [self._numbers(key, commands[key], call) for key in keys]
         if mode == THRUST_ATTITUDE:
             size = float(np.linalg.norm(values[1]))
             if size == 0.0:
-                raise self._failure(f"update returned cmd_q = 0 {at}, expected a quaternion "
-                                    "(i, j, k, w)")
+                raise self._failure(call, "cmd_q = 0: expected a quaternion (i, j, k, w)")
             values[1] = quaternion_from_rotorpy(values[1] / size)
         return mode, np.concatenate(values)
 
-    def _numbers(self, key: str, value: object, at: str) -> FloatArray:
+    def _numbers(self, key: str, value: object, call: str) -> FloatArray:
         """``value`` as the (SIZES[key],) float array of ``key``, checked finite."""
         try:
             numbers = np.asarray(value, dtype=np.float64).reshape(-1)
         except (TypeError, ValueError):
-            raise self._failure(f"update returned {key} = {value!r} {at}, expected "
-                                f"{SIZES[key]} number(s)") from None
+            raise self._failure(call, f"{key} = {str(value)[:40]!r}: expected "
+                                      f"{SIZES[key]} number(s)") from None
         if numbers.size != SIZES[key]:
-            raise self._failure(f"update returned {key} of {numbers.size} number(s) {at}, "
-                                f"expected {SIZES[key]}")
+            raise self._failure(call, f"{key} of {numbers.size} number(s): expected "
+                                      f"{SIZES[key]}")
         if not np.all(np.isfinite(numbers)):
-            raise self._failure(f"update returned a non-finite {key} {at}: "
-                                f"{np.array2string(numbers, precision=4)}")
+            raise self._failure(call, f"a non-finite {key}: "
+                                      f"{np.array2string(numbers, precision=4)}")
         return numbers
