@@ -83,7 +83,7 @@ def test_the_state_derivative_is_rotorpys(params):
         state[13:17] = rng.uniform(0.3, 1.0, 4) * vehicle.rotor_speed_max
         command = rng.uniform(0.0, 1.0, 4) * vehicle.rotor_speed_max
         ours = np.empty(STATE_SIZE)
-        derivative(state, command, arrays, np.zeros(3), ours)
+        derivative(state, command, arrays, np.zeros(3), np.zeros(3), ours)
         theirs = multirotor._s_dot_fn(0.0, rotorpy_state(state, corners), command[corners])
         np.testing.assert_allclose(rotorpy_state(ours, corners), theirs, rtol=1e-9,
                                    atol=1e-9 * np.max(np.abs(theirs)))

@@ -149,13 +149,14 @@ def test_rotor_geometry_signs():
 
 
 # ---------------------------------------------------------------------------- dynamics
-def _fly(params, state, commands, seconds, dt=0.001, floor_z=-math.inf, force=(0, 0, 0)):
+def _fly(params, state, commands, seconds, dt=0.001, floor_z=-math.inf, force=(0, 0, 0),
+         wind=(0, 0, 0)):
     v = vehicle_arrays(params)
     x = np.array(state, dtype=float)
     work = rk4_workspace()
     for _ in range(round(seconds / dt)):
-        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float), dt, floor_z,
-                 work)
+        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float),
+                 np.asarray(wind, float), dt, floor_z, work)
     return x
 
 
@@ -216,10 +217,25 @@ def test_rotor_drag_near_the_hover_is_the_hover_drag_and_the_parasitic_drag_is_q
         state = hover_state(params, [0, 0, 5])
         state[3] = speed
         out = np.empty(STATE_SIZE)
-        derivative(state, state[13:17].copy(), vehicle_arrays(params), np.zeros(3), out)
+        derivative(state, state[13:17].copy(), vehicle_arrays(params), np.zeros(3),
+                   np.zeros(3), out)
         drag = params.hover_drag[0] * speed + 0.01 * speed ** 2
         assert out[3] == pytest.approx(-drag / params.mass, rel=1e-12)
         assert abs(out[5]) < 1e-12 and np.allclose(out[10:13], 0.0, atol=1e-9)
+
+
+def test_a_wind_drags_the_vehicle_along_on_its_airspeed_to_the_winds_own_speed():
+    params = TELLO.replace(drag=np.array([0.05, 0.05, 0.05]))
+    state = hover_state(params, [0, 0, 5])
+    end = _fly(params, state, [params.hover_command] * 4, 10.0, wind=(2.0, -1.0, 0))
+    # at rest in a 2 m/s wind the drag pushes as in still air at -2 m/s; the vehicle
+    # speeds up to the wind's velocity: v(t) = wind (1 - exp(-drag t / m))
+    approach = 1.0 - math.exp(-0.05 * 10.0 / params.mass)
+    assert end[3:5] == pytest.approx(np.array([2.0, -1.0]) * approach, rel=1e-9)
+    # moving with the wind, there is no drag at all
+    state[3:6] = [2.0, -1.0, 0.0]
+    end = _fly(params, state, [params.hover_command] * 4, 1.0, wind=(2.0, -1.0, 0))
+    assert end[3:6] == pytest.approx([2.0, -1.0, 0.0], abs=1e-12)
 
 
 def test_quaternion_round_trips_through_a_matrix():

@@ -9,7 +9,7 @@ every break). The plan ends with its closing stop, planned and checked against t
 like every other motion of it, at rest exactly at the goal (and, for a goal inside the
 margin, with the leg into it), so the trajectory ends there too.
 :func:`fly_kino_plan` flies that trajectory through
-:func:`~quadnav.sim.simulate.simulate` with any registered controller, in the real map
+:func:`~quadnav.sim.simulate.simulate` with any controller (a name or a spec), in the real map
 with its exact contact checks, and measures it as a ``fly`` mission is measured
 (:func:`~quadnav.mission.measure_flight`: tracking errors, the margin kept by the
 trajectory and by the flight, the rotors' energy), so the two pipelines compare on
@@ -32,7 +32,7 @@ from scipy.interpolate import PPoly
 
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
@@ -97,7 +97,7 @@ class KinoFlight:
         flight: the simulated flight.
         vehicle: the simulated quadrotor.
         gains: the cascade's gains (used by the ``cascade`` controller).
-        controller: the controller's registered name.
+        controller: the controller's name or spec.
         settings: the simulation's settings.
     """
 
@@ -181,7 +181,8 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         gains: the cascade's gains (default: those tuned for the vehicle).
         settings: rates, goal tolerance, disturbances, seed (default: the defaults with
             the goal tolerance ``search.goal_radius``).
-        controller: a name of :data:`~quadnav.control.registry.CONTROLLERS`.
+        controller: a controller's name or spec
+            (:func:`~quadnav.control.registry.make_controller`).
         progress: called with the fraction of the flight simulated.
 
     Raises:
@@ -198,7 +199,7 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         raise QuadnavError(f"the plan ends at {format_point(end)}, not at the goal "
                            f"{'(none)' if world.goal is None else format_point(world.goal)} "
                            f"of {world.name}")
-    flown_by = CONTROLLERS.get(controller)(gains)
+    flown_by = make_controller(controller, gains, vehicle)
     check_control_rate(flown_by, vehicle, settings.control_rate)
     flight = simulate(trajectory, vehicle, gains, world, settings, progress, controller=flown_by)
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
@@ -92,8 +92,11 @@ class MissionSettings:
             holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the cascade's gains (the PX4-style controller).
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
-            ``cascade``, ``se3`` or one registered).
+        controller: the controller by name or spec
+            (:func:`~quadnav.control.registry.make_controller`: ``cascade``, ``se3``, one
+            registered, or ``module:NAME`` / ``path/to/file.py:NAME`` with keyword
+            arguments, a compiled controller's factory or a plain-Python controller's
+            class, loaded and checked here and built afresh for each flight).
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
@@ -127,8 +130,9 @@ class MissionSettings:
     def __post_init__(self) -> None:
         if self.reference is not None:
             parse_spec(self.reference, "reference")  # QuadnavError for a malformed spec
-        factory = CONTROLLERS.get(self.controller)  # QuadnavError naming the choices
-        check_control_rate(factory(self.gains), self.flown_vehicle, self.sim.control_rate)
+        if controller_class(self.controller) is None:  # a compiled one: is its rate stable?
+            controller = make_controller(self.controller, self.gains, self.vehicle)
+            check_control_rate(controller, self.flown_vehicle, self.sim.control_rate)
 
     @property
     def flown_vehicle(self) -> VehicleParams:
@@ -370,7 +374,8 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     timings["trajectory"] = time.perf_counter() - began
     flight = simulate(trajectory, settings.flown_vehicle, settings.gains, world, settings.sim,
                       flight_progress, model=settings.vehicle,
-                      controller=CONTROLLERS.get(settings.controller)(settings.gains))
+                      controller=make_controller(settings.controller, settings.gains,
+                                                 settings.vehicle))
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
 

@@ -99,8 +99,9 @@ class Registry(Generic[Plugin]):
         if spec.is_located:
             return load_target(spec.target, self.kind), spec.kwargs
         if spec.target not in self:
-            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected one of "
-                               f"{', '.join(self.names())}, or module:NAME or file.py:NAME")
+            names = f"one of {', '.join(self.names())}, or " if self.names() else ""
+            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected {names}"
+                               "module:NAME or file.py:NAME")
         return self.get(spec.target), spec.kwargs
 
 
@@ -232,14 +233,17 @@ def _raised_while_loading(where: str, kind: str, error: Exception) -> PluginErro
                        details=user_traceback(error))
 
 
-def user_traceback(error: BaseException) -> str:
+def user_traceback(error: BaseException) -> str | None:
     """The traceback of ``error`` without quadnav's own frames: what the plug-in's author
-    needs to see."""
+    needs to see; None when none of it is the plug-in's (it was called with arguments it
+    does not take, say) and the error is one line, which the message already holds."""
     frames = [frame for frame in traceback.extract_tb(error.__traceback__)
               if not frame.filename.startswith("<frozen ")
               and not Path(frame.filename).resolve().is_relative_to(_PACKAGE)]
-    lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames),
-             *traceback.format_exception_only(type(error), error)]
+    only = traceback.format_exception_only(type(error), error)
+    if not frames and len("".join(only).splitlines()) <= 1:
+        return None
+    lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames), *only]
     return "".join(lines).rstrip("\n")
 
 

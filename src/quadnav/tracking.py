@@ -19,7 +19,7 @@ import numpy as np
 
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.control.sampling import check_control_rate
 from quadnav.mission import flight_metrics, flight_succeeded
 from quadnav.sim.flight import Flight
@@ -81,7 +81,7 @@ class Tracking:
         gains: the cascade's gains.
         settings: the simulation settings flown with (a step's record rate raised to the
             control rate).
-        controller: the controller's name (``cascade``, ``se3``, ...).
+        controller: the controller's name or spec (``cascade``, ``se3``, ...).
     """
 
     reference: Reference
@@ -181,7 +181,8 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
         settings: rates, settling time, goal tolerance, disturbances, seed; a step is
             recorded at the control rate whatever the record rate.
         progress: called with the fraction of the flight simulated.
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`).
+        controller: the controller by name or spec
+            (:func:`~quadnav.control.registry.make_controller`).
 
     Raises:
         QuadnavError: a flight too long for the rates (see
@@ -194,7 +195,7 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
     if isinstance(reference, StepReference) and reference.is_step:
         settings = settings.replace(record_rate=settings.control_rate)
     world = track_world(reference)
-    flown_by = CONTROLLERS.get(controller)(gains)
+    flown_by = make_controller(controller, gains, vehicle)
     check_control_rate(flown_by, vehicle, settings.control_rate)
     flight = simulate(reference, vehicle, gains, world, settings, progress, controller=flown_by)
     return Tracking(reference, world, flight, vehicle, gains, settings, controller)

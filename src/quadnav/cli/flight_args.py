@@ -9,7 +9,7 @@ import argparse
 
 from quadnav.cli.args import number_in
 from quadnav.control.gains import Gains, course_gain_names, load_gains
-from quadnav.control.registry import CONTROLLERS, DEFAULT_CONTROLLER
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class
 from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
@@ -56,25 +56,33 @@ def add_vehicle_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_controller_argument(parser: argparse.ArgumentParser) -> None:
-    """--controller NAME."""
-    parser.add_argument("--controller", choices=CONTROLLERS.names(), default=DEFAULT_CONTROLLER,
-                        help="the controller: cascade (PX4-style, tuned by --gains) or se3 "
-                             "(the geometric controller of Lee et al., rotorpy's gains) "
-                             f"(default: {DEFAULT_CONTROLLER})")
+    """--controller NAME|SPEC."""
+    parser.add_argument("--controller", default=DEFAULT_CONTROLLER, metavar="NAME|SPEC",
+                        help="the controller: cascade (PX4-style, tuned by --gains), se3 "
+                             "(the geometric controller of Lee et al., rotorpy's gains), "
+                             "another registered name, or your own class in rotorpy's "
+                             "shape, update(t, state, flat_output) -> commands, named "
+                             "where it is: module:Class or path/to/file.py:Class, with "
+                             "keyword arguments Class(key=value, ...) (default: "
+                             f"{DEFAULT_CONTROLLER})")
 
 
 def vehicle_and_gains(args: argparse.Namespace) -> tuple[VehicleParams, Gains]:
-    """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here)."""
-    controller = getattr(args, "controller", DEFAULT_CONTROLLER)
-    if args.gains is not None and controller != DEFAULT_CONTROLLER:
-        raise QuadnavError(f"--gains sets the cascade's gains; --controller {controller} "
+    """The vehicle and the gains of :func:`add_vehicle_arguments` (files are read here);
+    the controller of ``--controller`` is loaded and checked here (not built), so that a
+    bad one is refused before any work."""
+    name = getattr(args, "controller", DEFAULT_CONTROLLER)
+    python = controller_class(name) is not None
+    if args.gains is not None and name != DEFAULT_CONTROLLER and not python:
+        raise QuadnavError(f"--gains sets the cascade's gains (and the inner loops a "
+                           f"plain-Python controller flies through); --controller {name} "
                            "flies with its own")
     vehicle = load_params(args.params)
     return vehicle, load_gains(args.gains, vehicle.gains)
 
 
 def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
-    """--physics-rate, --control-rate, --wind FX FY FZ, --gusts N and --settle S."""
+    """--physics-rate, --control-rate, --wind FX FY FZ|SPEC, --gusts N and --settle S."""
     parser.add_argument("--physics-rate", type=number_in(RATE), default=SimSettings.physics_rate,
                         metavar="HZ", help=f"RK4 steps per second, {RATE.describe()} "
                                            f"(default: {SimSettings.physics_rate:g})")
@@ -82,10 +90,12 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
                         metavar="HZ", help=f"controller updates per second, {RATE.describe()}; "
                                            "the physics rate must be a whole multiple "
                                            f"(default: {SimSettings.control_rate:g})")
-    parser.add_argument("--wind", nargs=3, type=number_in(FORCE), default=[0.0, 0.0, 0.0],
-                        metavar=("FX", "FY", "FZ"),
-                        help=f"steady wind as a force on the vehicle, world frame, each "
-                             f"{FORCE.describe()} (default: none)")
+    parser.add_argument("--wind", nargs="+", type=force_or_spec, metavar=("FX|SPEC", "FY FZ"),
+                        help=f"steady wind as a force on the vehicle FX FY FZ, N, world "
+                             f"frame, each {FORCE.describe()}; or a wind model, a class "
+                             "with update(t, position) -> wind velocity m/s (world frame), "
+                             "named module:Class or path/to/file.py:Class(key=value, ...): "
+                             "the drag acts on the airspeed (default: none)")
     parser.add_argument("--gusts", type=number_in(GUSTS), default=0.0, metavar="N",
                         help=f"random gusts: standard deviation of a force per axis, "
                              f"{GUSTS.describe()}, redrawn every "
@@ -103,9 +113,36 @@ def add_strict_argument(parser: argparse.ArgumentParser) -> None:
                              "by any amount (a warning line says so either way)")
 
 
+def force_or_spec(text: str) -> float | str:
+    """argparse type of ``--wind``'s values: a number (a force, N, in
+    :data:`~quadnav.limits.FORCE`) or a wind model's spec."""
+    try:
+        float(text)
+    except ValueError:
+        return text
+    return number_in(FORCE)(text)
+
+
+def wind_arguments(values: list[float | str] | None) -> tuple[list[float], str | None]:
+    """``--wind``'s values as the steady force (3,) N and the wind model's spec (or None).
+
+    Raises:
+        QuadnavError: neither three numbers nor one spec.
+    """
+    if values is None:
+        return [0.0, 0.0, 0.0], None
+    if len(values) == 3 and all(isinstance(value, float) for value in values):
+        return [float(value) for value in values], None
+    if len(values) == 1 and isinstance(values[0], str):
+        return [0.0, 0.0, 0.0], values[0]
+    raise QuadnavError(f"--wind: expected three forces FX FY FZ (N) or one wind model's spec, "
+                       f"got {' '.join(f'{v:g}' if isinstance(v, float) else v for v in values)}")
+
+
 def simulation_settings(args: argparse.Namespace) -> SimSettings:
     """The settings of :func:`add_simulation_arguments` and ``--seed``."""
+    wind, wind_model = wind_arguments(args.wind)
     return SimSettings(physics_rate=args.physics_rate, control_rate=args.control_rate,
                        record_rate=default_record_rate(args.control_rate),
-                       settle_time=args.settle, wind=args.wind, gust_std=args.gusts,
-                       seed=args.seed)
+                       settle_time=args.settle, wind=wind, wind_model=wind_model,
+                       gust_std=args.gusts, seed=args.seed)

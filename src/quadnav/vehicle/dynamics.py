@@ -12,10 +12,11 @@ indices    name        meaning
 13:17      rotors      rotor speeds, rad/s (rotor order of :mod:`.rotors`)
 =========  ==========  ===================================================
 
-Forces: rotor thrust along body z, gravity, linear drag ``-R D R^T v`` (``D`` the body-frame
-drag coefficients), rotorpy's aerodynamics when the vehicle has them
-(:func:`aerodynamic_wrench`: rotor drag, parasitic drag, translational lift, the flapping
-moment) and an external world-frame force (wind, a push). A solid floor at
+Forces: rotor thrust along body z, gravity, linear drag ``-R D R^T (v - w)`` on the airspeed
+(``D`` the body-frame drag coefficients, ``w`` the wind's velocity, world frame), rotorpy's
+aerodynamics on the same airspeed when the vehicle has them (:func:`aerodynamic_wrench`:
+rotor drag, parasitic drag, translational lift, the flapping moment) and an external
+world-frame force (a steady push, gusts). A solid floor at
 ``floor_z`` holds the centre of mass up: on touching it, the vehicle stops sinking and
 sliding and its body rates stop; :func:`rk4_step` returns the speed it met the floor at.
 """
@@ -140,17 +141,19 @@ def aerodynamic_wrench(x: np.ndarray, ux: float, uy: float, uz: float, v: Vehicl
 
 @njit(cache=True)
 def derivative(x: np.ndarray, rotor_command: np.ndarray, v: VehicleArrays,
-               force: np.ndarray, out: np.ndarray) -> None:
-    """Write d state / dt (17,) into ``out`` for rotor speed commands (4,) rad/s and an
-    external force (3,) N. Scalar arithmetic only: it runs four times per RK4 step."""
+               force: np.ndarray, wind: np.ndarray, out: np.ndarray) -> None:
+    """Write d state / dt (17,) into ``out`` for rotor speed commands (4,) rad/s, an
+    external force (3,) N and the wind's velocity (3,) m/s, both in the world frame.
+    Scalar arithmetic only: it runs four times per RK4 step."""
     qw, qx, qy, qz = x[6], x[7], x[8], x[9]
     wx, wy, wz = x[10], x[11], x[12]
     r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
     r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
     r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
-    ux = r00 * x[3] + r10 * x[4] + r20 * x[5]  # the airspeed in body axes
-    uy = r01 * x[3] + r11 * x[4] + r21 * x[5]
-    uz = r02 * x[3] + r12 * x[4] + r22 * x[5]
+    ax, ay, az = x[3] - wind[0], x[4] - wind[1], x[5] - wind[2]  # the airspeed
+    ux = r00 * ax + r10 * ay + r20 * az  # in body axes
+    uy = r01 * ax + r11 * ay + r21 * az
+    uz = r02 * ax + r12 * ay + r22 * az
     # body-frame forces besides the thrust (and torques besides the rotors'): rotorpy's
     # aerodynamics, if the vehicle has them (asked here, not in the function: that way
     # round, the loop of a vehicle without them ran a quarter slower), and the linear drag
@@ -208,22 +211,22 @@ def rk4_workspace() -> FloatArray:
 
 @njit(cache=True)
 def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.ndarray,
-             dt: float, floor_z: float, work: np.ndarray) -> float:
-    """Advance the state ``x`` (17,) in place by ``dt`` s holding motor commands (4,) and
-    force (3,) N: one RK4 step, then the quaternion renormalised and the floor applied.
-    ``work`` is :func:`rk4_workspace` (overwritten). Returns the speed, m/s, of the centre
-    when the floor stopped it in this step (the step took it below ``floor_z``): its
-    velocity's size at the end of the step, before the floor took it away; -1.0 when the
-    centre stayed at or above the floor."""
+             wind: np.ndarray, dt: float, floor_z: float, work: np.ndarray) -> float:
+    """Advance the state ``x`` (17,) in place by ``dt`` s holding motor commands (4,), an
+    external force (3,) N and the wind's velocity (3,) m/s: one RK4 step, then the
+    quaternion renormalised and the floor applied. ``work`` is :func:`rk4_workspace`
+    (overwritten). Returns the speed, m/s, of the centre when the floor stopped it in this
+    step (the step took it below ``floor_z``): its velocity's size at the end of the step,
+    before the floor took it away; -1.0 when the centre stayed at or above the floor."""
     target = work[_TARGETS, 0:4]
     rotor_speed_commands(commands, v, target)
     stage = work[_STAGE_STATE]
-    derivative(x, target, v, force, work[_STAGES])
+    derivative(x, target, v, force, wind, work[_STAGES])
     for step, weight in ((1, 0.5), (2, 0.5), (3, 1.0)):
         previous = work[_STAGES + step - 1]
         for i in range(STATE_SIZE):
             stage[i] = x[i] + weight * dt * previous[i]
-        derivative(stage, target, v, force, work[_STAGES + step])
+        derivative(stage, target, v, force, wind, work[_STAGES + step])
     for i in range(STATE_SIZE):
         x[i] += dt / 6.0 * (work[0, i] + 2.0 * work[1, i] + 2.0 * work[2, i] + work[3, i])
     norm = math.sqrt(x[6] ** 2 + x[7] ** 2 + x[8] ** 2 + x[9] ** 2)

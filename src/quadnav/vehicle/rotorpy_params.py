@@ -28,6 +28,11 @@ The aerodynamic keys that are missing count as 0, as rotorpy reads them. Ignored
 ``--noise``), ``ground_friction_beta`` (quadnav's floor is its own), and rotorpy's
 inner-loop gains ``k_w``, ``k_v``, ``kp_att``, ``kd_att``, which belong to the controllers
 that use them, not to the vehicle. ``rotor_radius``, when given, sizes the body box.
+
+:func:`rotorpy_params` goes the other way, for a plain-Python controller written for rotorpy
+(:mod:`quadnav.control.plain`), which is built with such a dict: the rotors in quadnav's
+order (1 front-right, 2 back-left, 3 front-left, 4 back-right), so the per-rotor commands it
+returns are in quadnav's order too.
 """
 
 from __future__ import annotations
@@ -106,6 +111,43 @@ def vehicle_from_rotorpy(params: Mapping[str, Any], name: str,
                                else _number(radius, "rotor_radius", where)))
     except QuadnavError as error:
         raise QuadnavError(f"{where}: {error}") from None
+
+
+def rotorpy_params(vehicle: VehicleParams) -> dict:
+    """``vehicle`` as rotorpy's parameter dict (``quad_params``), the keys of the module
+    docstring's table read the other way: ``rotor_pos`` (``r1`` to ``r4``, m) in quadnav's
+    rotor order with ``rotor_directions`` = ``-SPIN``, ``Ixy`` = ``Iyz`` = ``Ixz`` = 0,
+    ``rotor_speed_min`` = 0, ``rI`` = 0, ``motor_noise_std`` = 0, and rotorpy's aerodynamic
+    keys from the vehicle's. quadnav's linear ``drag`` (3,) N/(m/s) has no rotorpy key: it
+    joins the rotor drag as the four rotors would make it at the hover speed ``w_h``, so
+    ``k_d`` and ``k_z`` are :attr:`~quadnav.vehicle.params.VehicleParams.hover_drag` over
+    ``4 w_h`` (x and y averaged). rotorpy's inner-loop gains (``k_w``, ``k_v``, ``kp_att``,
+    ``kd_att``) are left out: a controller that reads them with ``dict.get`` takes its
+    default, as rotorpy's ``SE3Control`` does (310 and 57)."""
+    drag = vehicle.hover_drag / (4.0 * vehicle.hover_rotor_speed)  # per rotor, per rad/s
+    inertia = [float(value) for value in vehicle.inertia]
+    return {
+        "mass": float(vehicle.mass),
+        "Ixx": inertia[0], "Iyy": inertia[1], "Izz": inertia[2],
+        "Ixy": 0.0, "Iyz": 0.0, "Ixz": 0.0,
+        "num_rotors": 4,
+        "rotor_pos": {f"r{i + 1}": np.append(vehicle.arm_length * direction, 0.0)
+                      for i, direction in enumerate(ROTOR_DIRECTIONS)},
+        "rotor_directions": -SPIN.copy(),
+        "rI": np.zeros(3),
+        "c_Dx": float(vehicle.parasitic_drag[0]), "c_Dy": float(vehicle.parasitic_drag[1]),
+        "c_Dz": float(vehicle.parasitic_drag[2]),
+        "k_eta": float(vehicle.thrust_coefficient),
+        "k_m": float(vehicle.torque_coefficient),
+        "k_d": float(drag[0] + drag[1]) / 2.0,
+        "k_z": float(drag[2]),
+        "k_h": float(vehicle.translational_lift),
+        "k_flap": float(vehicle.flapping),
+        "tau_m": float(vehicle.motor_time_constant),
+        "rotor_speed_min": 0.0,
+        "rotor_speed_max": float(vehicle.rotor_speed_max),
+        "motor_noise_std": 0.0,
+    }
 
 
 def rotor_layout(params: Mapping[str, Any], where: str) -> tuple[float, list[int]]:
