@@ -98,9 +98,10 @@ def quadnav_run(trajectory: Trajectory, world: World) -> tuple[float, float, flo
 
 # ------------------------------------------------------------------- the baseline
 def numpy_derivative(x: np.ndarray, rotor_target: np.ndarray, v: VehicleArrays,
-                     force: np.ndarray) -> np.ndarray:
+                     force: np.ndarray, wind: np.ndarray) -> np.ndarray:
     """d state / dt (17,) of :func:`quadnav.vehicle.dynamics.derivative`, in numpy: state
-    ``x`` (17,), rotor speed targets (4,) rad/s, external force (3,) N."""
+    ``x`` (17,), rotor speed targets (4,) rad/s, external force (3,) N, wind velocity (3,)
+    m/s."""
     qw, qx, qy, qz = x[6:10]
     w = x[10:13]
     rotors = x[13:17]
@@ -113,7 +114,7 @@ def numpy_derivative(x: np.ndarray, rotor_target: np.ndarray, v: VehicleArrays,
     thrusts = v.thrust_coefficient * squared
     torque = np.array([v.allocation[1] @ thrusts, v.allocation[2] @ thrusts,
                        -v.torque_coefficient * (v.spin @ squared)])
-    drag = R @ (v.drag * (R.T @ x[3:6]))
+    drag = R @ (v.drag * (R.T @ (x[3:6] - wind)))
     acceleration = (R[:, 2] * thrusts.sum() - drag + force) / v.mass
     acceleration[2] -= v.gravity
     G = np.array([[-qx, -qy, -qz], [qw, -qz, qy], [qz, qw, -qx], [-qy, qx, qw]])
@@ -138,9 +139,9 @@ def derivative_mismatch(params: VehicleParams, samples: int = 100) -> float:
         x[6:10] /= np.linalg.norm(x[6:10])
         x[13:17] = rng.uniform(0.0, params.rotor_speed_max, 4)
         target = rng.uniform(0.0, params.rotor_speed_max, 4)
-        force = rng.normal(size=3)
-        derivative(x, target, v, force, out)
-        expected = numpy_derivative(x, target, v, force)
+        force, wind = rng.normal(size=3), rng.normal(size=3)
+        derivative(x, target, v, force, wind, out)
+        expected = numpy_derivative(x, target, v, force, wind)
         worst = max(worst, float(np.max(np.abs(out - expected)) / np.max(np.abs(out))))
     return worst
 
@@ -159,14 +160,14 @@ def baseline_run(trajectory: Trajectory, params: VehicleParams, gains: Gains,
     g = gain_arrays(gains)
     memory = new_memory()
     state = hover_state(params, references[0, 0:3], references[0, 9])
-    no_force = np.zeros(3)
+    still = np.zeros(3)
     squared_error = 0.0
     for reference in references:
         squared_error += float(np.sum((state[0:3] - reference[0:3]) ** 2))
         commands = control(memory, state, reference, g, v, dt)
         target = v.rotor_speed_max * np.sqrt(np.clip(commands, 0.0, 1.0))
         solution = solve_ivp(lambda _t, s, target=target: numpy_derivative(s, target, v,
-                                                                          no_force),
+                                                                          still, still),
                              (0.0, dt), state)
         state = solution.y[:, -1].copy()
         state[6:10] /= np.linalg.norm(state[6:10])

@@ -4,7 +4,8 @@ flown through a course map with the rest of quadnav's pipeline.
 A planner is a function ``planner(problem, settings, progress) -> PlanResult`` that
 searches ``problem.free_world`` (the map with its blocks grown by the margin) from
 ``problem.search_start`` to ``problem.search_goal``; ``problem.full_path`` adds the
-short legs out of the margin. Use this file as a template.
+short legs out of the margin. Use this file as a template. (A plain function
+``(world, start, goal, margin) -> path`` needs no registering: examples/plain_planner.py.)
 
 Run: python examples/custom_planner.py [MAP]   (a map with its own start and goal, such as
 course:meam620/test_window, after quadnav maps fetch meam620/test_window; default: the

@@ -3,8 +3,9 @@ no polynomial fit) by the same closed loop as every other flight.
 
 A reference is any object with ``duration`` (s) and ``position(t)``, ``velocity(t)``,
 ``acceleration(t)`` ((N, 3) for N times, world frame, SI), ``yaw(t)`` ((N,) rad) and
-``sample(dt)`` (inherit :class:`~quadnav.trajectory.reference.Sampling` for it). Use this
-file as a template.
+``sample(dt)`` (inherit :class:`~quadnav.trajectory.reference.Sampling` for it), for
+``simulate`` and ``track_reference``. Use this file as a template. (The command line flies
+a plain class with ``update(t) -> flat outputs`` instead: examples/plain_trajectory.py.)
 
 Run: python examples/custom_reference.py [MAP X Y Z]   (default: open space; with a map, the
 rose is centred at (X, Y, Z) in it, and a touch of a block ends the flight)

@@ -5,6 +5,8 @@ A method is a function ``method(waypoints (N, 3) m, segment_times (N - 1,) s, se
 -> Trajectory`` that passes every waypoint at the given times and is at rest at both
 ends; quadnav chooses the times, keeps the result within the speed and acceleration
 limits and inside the margin (adding waypoints where needed). Use this file as a template.
+(A plain class in rotorpy's shape, ``update(t) -> flat outputs``, timed and flown as it is,
+needs no registering: examples/plain_trajectory.py.)
 
 Run: python examples/custom_trajectory.py [MAP]   (default: the built-in forest)
 """

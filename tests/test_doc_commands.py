@@ -239,6 +239,7 @@ def test_the_commands_of_a_page_run_as_written(page, tmp_path, monkeypatch, caps
     monkeypatch.setenv(CACHE_ENV, str(tmp_path / "course-cache"))
     monkeypatch.setenv(URL_ENV, course_maps_url or dead_url())
     (tmp_path / "work").mkdir()
+    (tmp_path / "work" / "examples").symlink_to(ROOT / "examples")  # as in a checkout
     for name, text in PAGE_FILES[page].items():
         (tmp_path / "work" / name).write_text(text)
     monkeypatch.chdir(tmp_path / "work")

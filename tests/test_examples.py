@@ -36,7 +36,9 @@ def run_example(capsys, monkeypatch):
 
 def test_every_example_is_tested():
     tested = {"plan.py", "fly.py", "custom_planner.py", "custom_trajectory.py",
-              "custom_reference.py", "custom_controller.py", "batch_study.py"}
+              "custom_reference.py", "custom_controller.py", "batch_study.py",
+              "plain_planner.py", "plain_trajectory.py", "plain_controller.py",
+              "plain_wind.py"}
     assert {path.name for path in EXAMPLES.glob("*.py")} == tested
 
 
@@ -51,9 +53,19 @@ def test_a_planner_of_ones_own_flies_a_course_map(run_example, fetched_course_ma
     assert out.startswith("test_window by PRM: success True"), out
 
 
+def test_a_plain_planner_function_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_planner.py")
+    assert out.startswith("graph search at 0.25 m: success True"), out
+
+
 def test_a_trajectory_method_of_ones_own_flies(run_example):
     out = run_example("custom_trajectory.py", "window")
     assert out.startswith("minimum jerk: success True"), out
+
+
+def test_a_plain_trajectory_class_flies_a_shipped_course_map(run_example):
+    out = run_example("plain_trajectory.py")
+    assert out.startswith("stop and go at 1.5 m/s: success True"), out
 
 
 def test_a_reference_of_ones_own_is_tracked(run_example):
@@ -78,3 +90,19 @@ def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offse
                        for line in lines.splitlines())
     assert all("success True" in line for line in lines.splitlines()), lines
     assert integral < 1.0 < plain, lines
+
+
+@pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
+def test_a_plain_python_controller_flies_a_course_map(run_example, fetched_course_maps):
+    out = run_example("plain_controller.py", "course:meam620/test_window")
+    assert out.startswith("PD attitude in course:meam620/test_window: success True"), out
+    assert float(out.split("RMS tracking error ")[1].split(" cm")[0]) < 5.0, out
+
+
+def test_a_plain_python_wind_blows_a_flight_off_its_track_and_it_still_arrives(run_example):
+    still, front = run_example("plain_wind.py").splitlines()
+    assert still.startswith("still air in forest: success True"), still
+    assert front.startswith("gust front in forest: success True"), front
+    errors = [float(line.split("RMS tracking error ")[1].split(" cm")[0])
+              for line in (still, front)]
+    assert errors[1] > 3 * errors[0], (still, front)

@@ -178,7 +178,7 @@ def test_a_run_without_a_path_shows_the_map_and_the_tree(pathless):
     texts = legend_texts(fig)
     assert any(t.startswith("tree (") for t in texts)
     assert not any(t.startswith(("path", "trajectory", "flown")) for t in texts)
-    assert fig._suptitle.get_text().endswith("\nno path")
+    assert fig._suptitle.get_text().endswith("\nno path found")
 
 
 @pytest.mark.parametrize("which", ["run", "crashed"])

@@ -69,7 +69,7 @@ spread = {{mass = 0.1}}
 
 
 @pytest.mark.parametrize(("text", "message"), [
-    ("map = 'forest'\n\n[trajectory]\nsped = 3\n", "m.toml:4: trajectory.sped: unknown key; expected one of method, timing, speed, accel, reference"),
+    ("map = 'forest'\n\n[trajectory]\nsped = 3\n", "m.toml:4: trajectory.sped: unknown key; expected one of method, timing, speed, accel, reference, duration"),
     ("[trajectory]\nspeed = 0\n", 'm.toml:2: trajectory.speed: expected from 0.01 to 100 m/s or "max", got 0'),
     ("trajectory = {speed = 'fast'}\n", "m.toml:1: trajectory.speed: expected from 0.01 to 100 m/s or \"max\", got 'fast'"),
     ("seed = 1\nbogus = 2\n", "m.toml:2: bogus: unknown key; expected one of map, seed, vehicle, query, planner, trajectory, controller, simulation, disturbances"),
@@ -80,7 +80,7 @@ spread = {{mass = 0.1}}
     ("[disturbances]\nspread = {mas = 0.1}\n", "m.toml:2: disturbances.spread.mas: unknown key; expected one of mass, thrust, drag"),
     ("[disturbances]\nwind = [0, 0, 500]\n", "m.toml:2: disturbances.wind: expected [fx, fy, fz], each from -100 to 100 N, got [0, 0, 500]"),
     ("simulation = 3\n", "m.toml:1: simulation: expected a table [simulation], got 3"),
-    ("vehicle = 'jet'\n", "m.toml:1: vehicle: jet: expected a vehicle preset (rbe595, tello) or a TOML file"),
+    ("vehicle = 'jet'\n", "m.toml:1: vehicle: jet: expected a vehicle preset (rbe595, tello), a TOML file or a rotorpy parameter dict"),
     ("[vehicle]\nmass = -1.0\n", "m.toml:1: vehicle: mass must be > 0, got -1.0"),
     ("map = 'nowhere.txt'\n", "m.toml:1: map: nowhere.txt: no such map file"),
     ("[query]\nstart_goal = 'none.txt'\n", "m.toml:2: query.start_goal: none.txt: cannot read"),
@@ -260,7 +260,7 @@ def test_fly_flies_the_mission_a_batch_builds_from_the_same_settings(tmp_path):
 def test_the_library_defaults_are_the_builders():
     built, library = MissionConfig().settings(), MissionSettings()
     for key in ("planner", "planning", "refine", "trajectory", "fastest", "vehicle", "gains",
-                "controller", "sim", "plant", "reference"):
+                "controller", "sim", "plant", "reference", "reference_duration"):
         assert as_plain(getattr(built, key)) == as_plain(getattr(library, key)), key
     rbe595 = MissionSettings(vehicle=load_params("rbe595"))
     assert as_plain(MissionConfig(vehicle="rbe595").settings().flown_gains) == as_plain(

@@ -248,7 +248,7 @@ def test_a_bad_file_is_one_line_naming_the_line_and_column(tmp_path, text, messa
 
 
 def test_an_unknown_source_and_a_bad_rate_are_one_line(tmp_path):
-    with pytest.raises(QuadnavError, match=re.escape("nothing.csv: no such file, and not a "
+    with pytest.raises(QuadnavError, match=re.escape("nothing.csv: no such file, not a "
                                                      "built-in reference (built-in: hover")):
         load_reference(tmp_path / "nothing.csv")
     path = tmp_path / "MP.csv"

@@ -118,7 +118,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
     bad.write_text("0,1\n" * 8)
     out = tmp_path / "out"
     cases = [
-        (("spiral",), "spiral: no such file, and not a built-in reference (built-in: hover"),
+        (("spiral",), "spiral: no such file, not a built-in reference (built-in: hover"),
         (("step:size=0",), "step:size=0: size: expected a step other than 0 m"),
         (("helix:radius=-1",), "radius: expected from 0.01 to 1,000 m, got -1"),
         ((bad,), "MP.csv: expected 9 rows (x, y, z, vx, vy, vz, ax, ay, az"),

@@ -13,6 +13,7 @@ from quadnav.errors import QuadnavError
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import (
     STATE_SIZE,
+    derivative,
     hover_state,
     rk4_step,
     rk4_workspace,
@@ -68,6 +69,20 @@ def test_a_params_file_overrides_its_preset(tmp_path):
     assert np.array_equal(params.inertia, RBE595.inertia)
 
 
+def test_a_params_file_sets_rotorpys_aerodynamics_which_the_presets_leave_out(tmp_path):
+    path = tmp_path / "aero.toml"
+    path.write_text("rotor_drag = [1e-6, 1e-6, 7e-7]\nparasitic_drag = [0.01, 0.01, 0.02]\n"
+                    "translational_lift = 1e-3\nflapping = 1e-6\n")
+    params = load_params(path)
+    assert np.array_equal(params.rotor_drag, [1e-6, 1e-6, 7e-7])
+    assert np.array_equal(params.parasitic_drag, [0.01, 0.01, 0.02])
+    assert (params.translational_lift, params.flapping) == (1e-3, 1e-6)
+    assert vehicle_arrays(params).aerodynamics.modelled
+    for preset in (TELLO, RBE595):
+        assert not vehicle_arrays(preset).aerodynamics.modelled
+        assert np.array_equal(preset.hover_drag, preset.drag)
+
+
 @pytest.mark.parametrize(("text", "message"), [
     ("mass = -1\n", "mass must be > 0"),
     ("masss = 1\n", "unknown key 'masss'"),
@@ -75,6 +90,8 @@ def test_a_params_file_overrides_its_preset(tmp_path):
     ("mass = 'heavy'\n", "mass: expected a number"),
     ('based_on = "boeing"\n', "based_on must name a preset"),
     ("mass = 2.0\n", "not more than the weight"),
+    ("rotor_drag = [1e-6, 1e-6, -1e-6]\n", "rotor_drag must be >= 0"),
+    ("flapping = -1e-6\n", "flapping must be >= 0"),
     ("mass = [\n", "not valid TOML"),
     ("mass = " + "9" * 5000 + "\n", "not valid TOML: a number with too many digits"),
 ])
@@ -132,13 +149,14 @@ def test_rotor_geometry_signs():
 
 
 # ---------------------------------------------------------------------------- dynamics
-def _fly(params, state, commands, seconds, dt=0.001, floor_z=-math.inf, force=(0, 0, 0)):
+def _fly(params, state, commands, seconds, dt=0.001, floor_z=-math.inf, force=(0, 0, 0),
+         wind=(0, 0, 0)):
     v = vehicle_arrays(params)
     x = np.array(state, dtype=float)
     work = rk4_workspace()
     for _ in range(round(seconds / dt)):
-        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float), dt, floor_z,
-                 work)
+        rk4_step(x, np.asarray(commands, dtype=float), v, np.asarray(force, float),
+                 np.asarray(wind, float), dt, floor_z, work)
     return x
 
 
@@ -186,6 +204,38 @@ def test_drag_gives_the_terminal_speed_of_a_constant_push():
     end = _fly(params, state, [params.hover_command] * 4, 10.0, force=(0.05, 0, 0))
     # v(t) = (push / drag) (1 - exp(-drag t / m))
     assert end[3] == pytest.approx(1.0 - math.exp(-0.05 * 10.0 / params.mass), rel=1e-9)
+
+
+def test_rotor_drag_near_the_hover_is_the_hover_drag_and_the_parasitic_drag_is_quadratic():
+    """A level vehicle, its rotors at the hover speed, flying at ``v`` along body x meets
+    ``-hover_drag v`` from its rotors' drag (``4 w_hover k_d v``) and ``-c_D v^2`` from its
+    frame, and neither lifts nor turns it."""
+    params = TELLO.replace(drag=np.zeros(3), rotor_drag=np.array([2e-6, 2e-6, 1e-6]),
+                           parasitic_drag=np.array([0.01, 0.01, 0.02]))
+    assert params.hover_drag[0] == pytest.approx(4 * params.hover_rotor_speed * 2e-6)
+    for speed in (0.5, 2.0):
+        state = hover_state(params, [0, 0, 5])
+        state[3] = speed
+        out = np.empty(STATE_SIZE)
+        derivative(state, state[13:17].copy(), vehicle_arrays(params), np.zeros(3),
+                   np.zeros(3), out)
+        drag = params.hover_drag[0] * speed + 0.01 * speed ** 2
+        assert out[3] == pytest.approx(-drag / params.mass, rel=1e-12)
+        assert abs(out[5]) < 1e-12 and np.allclose(out[10:13], 0.0, atol=1e-9)
+
+
+def test_a_wind_drags_the_vehicle_along_on_its_airspeed_to_the_winds_own_speed():
+    params = TELLO.replace(drag=np.array([0.05, 0.05, 0.05]))
+    state = hover_state(params, [0, 0, 5])
+    end = _fly(params, state, [params.hover_command] * 4, 10.0, wind=(2.0, -1.0, 0))
+    # at rest in a 2 m/s wind the drag pushes as in still air at -2 m/s; the vehicle
+    # speeds up to the wind's velocity: v(t) = wind (1 - exp(-drag t / m))
+    approach = 1.0 - math.exp(-0.05 * 10.0 / params.mass)
+    assert end[3:5] == pytest.approx(np.array([2.0, -1.0]) * approach, rel=1e-9)
+    # moving with the wind, there is no drag at all
+    state[3:6] = [2.0, -1.0, 0.0]
+    end = _fly(params, state, [params.hover_command] * 4, 1.0, wind=(2.0, -1.0, 0))
+    assert end[3:6] == pytest.approx([2.0, -1.0, 0.0], abs=1e-12)
 
 
 def test_quaternion_round_trips_through_a_matrix():

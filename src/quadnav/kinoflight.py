@@ -9,7 +9,7 @@ every break). The plan ends with its closing stop, planned and checked against t
 like every other motion of it, at rest exactly at the goal (and, for a goal inside the
 margin, with the leg into it), so the trajectory ends there too.
 :func:`fly_kino_plan` flies that trajectory through
-:func:`~quadnav.sim.simulate.simulate` with any registered controller, in the real map
+:func:`~quadnav.sim.simulate.simulate` with any controller (a name or a spec), in the real map
 with its exact contact checks, and measures it as a ``fly`` mission is measured
 (:func:`~quadnav.mission.measure_flight`: tracking errors, the margin kept by the
 trajectory and by the flight, the rotors' energy), so the two pipelines compare on
@@ -97,7 +97,7 @@ class KinoFlight:
         flight: the simulated flight.
         vehicle: the simulated quadrotor.
         gains: the controller's own gains (None for a controller without any).
-        controller: the controller's registered name.
+        controller: the controller's name or spec.
         settings: the simulation's settings.
     """
 
@@ -182,7 +182,8 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
             :func:`~quadnav.control.registry.controller_gains`).
         settings: rates, goal tolerance, disturbances, seed (default: the defaults with
             the goal tolerance ``search.goal_radius``).
-        controller: a name of :data:`~quadnav.control.registry.CONTROLLERS`.
+        controller: a controller's name or spec
+            (:func:`~quadnav.control.registry.make_controller`).
         progress: called with the fraction of the flight simulated.
 
     Raises:

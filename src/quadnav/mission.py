@@ -1,9 +1,10 @@
 """The whole pipeline, World -> Path -> Trajectory -> Flight: :func:`fly_mission`.
 
-Plan with RRT* (or an OMPL planner), shortcut and smooth the path, make a
-minimum-snap trajectory that keeps the margin everywhere but on the legs out of it,
-check that the vehicle can fly it, and fly it in simulation against the real
-(uninflated) map. :meth:`Mission.metrics` summarises the outcome for reports and
+Plan with RRT* (or an OMPL planner, or one of your own), shortcut and smooth the path, make
+a minimum-snap trajectory that keeps the margin everywhere but on the legs out of it,
+check that the vehicle can fly it (or, instead, build a trajectory class of your own from
+the path and sample it: :mod:`quadnav.trajectory.plain`), and fly it in simulation against
+the real (uninflated) map. :meth:`Mission.metrics` summarises the outcome for reports and
 ``metrics.json``, with the margin kept on and off the legs measured exactly.
 """
 
@@ -24,21 +25,34 @@ from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
 from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
-from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
+from quadnav.control.registry import (
+    DEFAULT_CONTROLLER,
+    controller_class,
+    controller_gains,
+    make_controller,
+)
 from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import path_length
+from quadnav.plugins import parse_spec
 from quadnav.sim.envelope import flyable_trajectory
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.model import Trajectory, YawMode
+from quadnav.trajectory.plain import (
+    FlatOutputReference,
+    check_ends,
+    flat_reference,
+    leg_window,
+    load_trajectory_class,
+)
 from quadnav.trajectory.space import (
     SafeSpace,
-    trajectory_margins,
+    reference_margins,
     windowed_margins,
     within_window,
 )
@@ -71,9 +85,13 @@ class MissionSettings:
     """Everything a mission needs besides the map and the query.
 
     Attributes:
-        planner: planner name (``rrtstar`` or ``ompl:NAME``).
+        planner: planner name (``rrtstar`` or ``ompl:NAME``), or a plain function of your
+            own, ``module:function`` or ``path/to/file.py:function``
+            (:mod:`quadnav.planning.plain`).
         planning: the planner's budget, seed and tuning.
-        refine: shortcut and smooth the path before making the trajectory.
+        refine: shortcut and smooth the path before making the trajectory (shortcut only
+            for a trajectory class of your own, ``reference``: the fewest straight
+            segments, whose corners the class rounds as it will).
         trajectory: generator and limits (``v_max`` is the top speed).
         fastest: ignore the trajectory's speed and acceleration limits and fly as fast as
             the vehicle can follow on the path: its own limits
@@ -82,11 +100,15 @@ class MissionSettings:
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the controller's own gains (the cascade's
             :class:`~quadnav.control.gains.Gains`, SE(3)'s
-            :class:`~quadnav.control.se3.SE3Gains`); None: those tuned for ``vehicle``,
-            whichever it is (:attr:`flown_gains`), so that a vehicle never flies with
-            another vehicle's gains unless they are given.
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`:
-            ``cascade``, ``se3`` or one registered) or a plug-in spec.
+            :class:`~quadnav.control.se3.SE3Gains`, a plain-Python controller's inner
+            loops' :class:`~quadnav.control.gains.Gains`); None: those tuned for
+            ``vehicle``, whichever it is (:attr:`flown_gains`), so that a vehicle never
+            flies with another vehicle's gains unless they are given.
+        controller: the controller by name or spec
+            (:func:`~quadnav.control.registry.make_controller`: ``cascade``, ``se3``, one
+            registered, or ``module:NAME`` / ``path/to/file.py:NAME`` with keyword
+            arguments, a compiled controller's factory or a plain-Python controller's
+            class, loaded and checked here and built afresh for each flight).
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
@@ -94,8 +116,14 @@ class MissionSettings:
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
             its model, unaware of the difference.
-        reference: a plain-Python reference (a plug-in spec, its text) flown instead of the
-            trajectory made through the path; None: that trajectory.
+        reference: a trajectory class of your own that replaces the trajectory stage,
+            ``module:Class`` or ``path/to/file.py:Class`` with literal keyword arguments
+            (:mod:`quadnav.trajectory.plain`): built from the refined path (as ``points``
+            when it takes them), sampled at the control rate and flown; it must start at
+            the start and end at the goal (within ``sim.goal_tolerance``). ``trajectory``
+            and ``fastest`` then do not apply. None: quadnav's trajectory stage.
+        reference_duration: how long ``reference`` is flown, s (None: as long as it says
+            it lasts).
     """
 
     planner: str = "rrtstar"
@@ -109,10 +137,16 @@ class MissionSettings:
     sim: SimSettings = field(default_factory=SimSettings)
     plant: VehicleParams | None = None
     reference: str | None = None
+    reference_duration: float | None = None
 
     def __post_init__(self) -> None:
-        # QuadnavError naming the choices for an unknown controller, or bad gains
-        check_control_rate(self.flying_controller(), self.flown_vehicle, self.sim.control_rate)
+        if self.reference is not None:
+            parse_spec(self.reference, "reference")  # QuadnavError for a malformed spec
+        # QuadnavError naming the choices for an unknown controller, or bad gains; a
+        # plain-Python one is loaded and checked, not built (it is, once per flight)
+        if controller_class(self.controller) is None:  # a compiled one: is its rate stable?
+            check_control_rate(self.flying_controller(), self.flown_vehicle,
+                               self.sim.control_rate)
 
     @property
     def flown_gains(self) -> Any:
@@ -145,8 +179,9 @@ class MissionSettings:
     def body(self) -> FloatArray:
         """(3,) half extents of the flown vehicle's body along x, y, z, m, as missions fly
         it: what :func:`~quadnav.planning.make_problem` keeps inside the map. At yaw 0, or at
-        any heading when the trajectory turns the vehicle to face its travel."""
-        if self.trajectory.yaw is YawMode.TRAVEL:
+        any heading when the trajectory turns the vehicle to face its travel, or when a
+        trajectory class of your own (``reference``) may turn it."""
+        if self.trajectory.yaw is YawMode.TRAVEL or self.reference is not None:
             return self.flown_vehicle.half_extents_any_heading()
         return self.flown_vehicle.half_extents()
 
@@ -159,7 +194,8 @@ class Mission:
         problem: the checked query (world, margin, start, goal).
         plan: the planner's result after refinement (``plan.solved`` False: no path).
         raw_length: path length before refinement, m (inf without a path).
-        trajectory: the reference flown (None without a path).
+        trajectory: the reference flown (None without a path): quadnav's trajectory, or
+            a trajectory class of your own sampled (``settings.reference``).
         flight: the simulated flight (None without a path).
         timings: wall time of each stage, s: ``planning``, ``trajectory``, ``simulation``
             (the closed loop alone; its loading is the flight's ``load_time``).
@@ -169,7 +205,7 @@ class Mission:
     problem: PlanningProblem
     plan: PlanResult
     raw_length: float
-    trajectory: Trajectory | None
+    trajectory: Trajectory | FlatOutputReference | None
     flight: Flight | None
     timings: dict[str, float]
     settings: MissionSettings
@@ -183,9 +219,15 @@ class Mission:
 
     def parameters(self) -> dict:
         """Every setting the mission ran with, JSON-ready: the query, planner, trajectory,
-        vehicle, gains and simulation settings, and the plant when it is not the vehicle."""
+        vehicle, gains and simulation settings, the plant when it is not the vehicle, and a
+        trajectory class of your own with how it was sampled."""
         problem = self.problem
         plant = {} if self.settings.plant is None else {"plant": as_plain(self.settings.plant)}
+        if self.settings.reference is not None:
+            sampled = getattr(self.trajectory, "info", None)
+            plant |= {"reference": self.settings.reference,
+                      "reference_duration_s": self.settings.reference_duration,
+                      "reference_info": None if sampled is None else dict(sampled)}
         return {
             "map": problem.world.name, "start": problem.start.tolist(),
             "goal": problem.goal_asked.tolist(), "margin_m": problem.margin,
@@ -232,15 +274,16 @@ class Mission:
                               self.settings.sim, self.problem.margin)
 
 
-def measure_flight(world: World, trajectory: Trajectory, flight: Flight,
+def measure_flight(world: World, trajectory: Trajectory | FlatOutputReference, flight: Flight,
                    settings: SimSettings, margin: float) -> dict:
     """The flight's part of :meth:`Mission.metrics`: the margin (per axis, m) kept from the
-    real blocks and the boundary, measured exactly, by the trajectory and by the flight,
+    real blocks and the boundary, measured exactly, by the trajectory
+    (:func:`~quadnav.trajectory.space.reference_margins`) and by the flight,
     off the legs and on them (None without legs), how much less than the asked ``margin``
     m the flight kept off the legs (:func:`margin_shortfall`) and when it kept the least
     (:func:`least_margin_time`), and :func:`flight_metrics`. The flown track is taken as
     straight between its records, each such stretch measured by its bounding box."""
-    off, on = trajectory_margins(trajectory, world)
+    off, on = reference_margins(trajectory, world)
     stretches = segment_box_margins(world, flight.position)
     window = trajectory.main_window
     flown_off, flown_on = windowed_margins(flight.t, stretches, window)
@@ -349,23 +392,46 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     began = time.perf_counter()
     result = plan(problem, settings.planning, settings.planner, planning_progress)
     raw_length = result.length
-    if settings.refine and result.solved:
-        result = refine(problem, result)
+    if settings.refine and result.solved:  # a class of your own rounds the corners itself
+        result = refine(problem, result, smooth=settings.reference is None)
     timings = {"planning": time.perf_counter() - began}
     if not result.solved:
         return Mission(problem, result, raw_length, None, None, timings, settings)
     began = time.perf_counter()
-    trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,
-                                            SafeSpace(world, problem.margin),
-                                            settings.vehicle, settings.limit_gains,
-                                            settings.fastest)
-    settings = dataclasses.replace(settings, trajectory=chosen)
+    if settings.reference is None:
+        trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,
+                                                SafeSpace(world, problem.margin),
+                                                settings.vehicle, settings.limit_gains,
+                                                settings.fastest)
+        settings = dataclasses.replace(settings, trajectory=chosen)
+    else:
+        trajectory = path_reference(problem, result.path, settings)
     timings["trajectory"] = time.perf_counter() - began
     flight = simulate(trajectory, settings.flown_vehicle, world=world, settings=settings.sim,
                       progress=flight_progress, model=settings.vehicle,
                       controller=settings.flying_controller())
     timings["simulation"] = flight.wall_time
     return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
+
+
+def path_reference(problem: PlanningProblem, path: FloatArray, settings: MissionSettings
+                   ) -> FlatOutputReference:
+    """The trajectory class ``settings.reference`` built from ``path`` (N, 3) m, sampled
+    at the control rate for ``settings.reference_duration`` s (or as long as it says),
+    with its legs' times (:func:`~quadnav.trajectory.plain.leg_window`).
+
+    Raises:
+        QuadnavError: a class that cannot be loaded or built (exit 2).
+        PluginError: one that raises or returns what cannot be flown, or that does not
+            start at the start and end at the goal within the goal tolerance (exit 1).
+    """
+    chosen = load_trajectory_class(str(settings.reference), with_points=True)
+    reference = flat_reference(chosen.build(path), chosen.text, 1.0 / settings.sim.control_rate,
+                               settings.reference_duration)
+    check_ends(reference, problem.start, problem.goal, settings.sim.goal_tolerance)
+    window = leg_window(reference, problem.free_world, len(problem.start_leg) > 1,
+                        len(problem.goal_leg) > 1)
+    return dataclasses.replace(reference, window=window)
 
 
 def warn_if_margin_too_small(margin: float, vehicle: VehicleParams) -> None:

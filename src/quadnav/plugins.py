@@ -19,6 +19,7 @@ import ast
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import sys
 import traceback
 from collections.abc import Callable, Iterator, Mapping
@@ -27,6 +28,8 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from types import MappingProxyType, ModuleType
 from typing import Any, Generic, TypeVar
+
+import numpy as np
 
 from quadnav.errors import QuadnavError
 
@@ -96,8 +99,9 @@ class Registry(Generic[Plugin]):
         if spec.is_located:
             return load_target(spec.target, self.kind), spec.kwargs
         if spec.target not in self:
-            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected one of "
-                               f"{', '.join(self.names())}, or module:NAME or file.py:NAME")
+            names = f"one of {', '.join(self.names())}, or " if self.names() else ""
+            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected {names}"
+                               "module:NAME or file.py:NAME")
         return self.get(spec.target), spec.kwargs
 
 
@@ -229,12 +233,74 @@ def _raised_while_loading(where: str, kind: str, error: Exception) -> PluginErro
                        details=user_traceback(error))
 
 
-def user_traceback(error: BaseException) -> str:
+def user_traceback(error: BaseException) -> str | None:
     """The traceback of ``error`` without quadnav's own frames: what the plug-in's author
-    needs to see."""
+    needs to see; None when none of it is the plug-in's (it was called with arguments it
+    does not take, say) and the error is one line, which the message already holds."""
     frames = [frame for frame in traceback.extract_tb(error.__traceback__)
               if not frame.filename.startswith("<frozen ")
               and not Path(frame.filename).resolve().is_relative_to(_PACKAGE)]
-    lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames),
-             *traceback.format_exception_only(type(error), error)]
+    only = traceback.format_exception_only(type(error), error)
+    if not frames and len("".join(only).splitlines()) <= 1:
+        return None
+    lines = ["Traceback (most recent call last):\n", *traceback.format_list(frames), *only]
     return "".join(lines).rstrip("\n")
+
+
+def literal_arrays(kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """``kwargs`` with every non-empty list or tuple of numbers (nested to any depth, as
+    long as it is rectangular) turned into a float64 numpy array: the form numerical code,
+    rotorpy's classes among it, does arithmetic on (``2 * np.pi * freq``). Other values are
+    passed as they are."""
+    return {key: np.array(value, dtype=np.float64) if _numbers(value) else value
+            for key, value in kwargs.items()}
+
+
+def _numbers(value: Any) -> bool:
+    """Whether ``value`` is a non-empty, rectangular list or tuple of numbers (not bools),
+    nested to any depth."""
+    if not isinstance(value, list | tuple) or not value:
+        return False
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return True
+    return (all(_numbers(v) for v in value)
+            and len({np.shape(v) for v in value}) == 1)
+
+
+def check_call(kind: str, text: str, function: Callable, positional: tuple[str, ...],
+               kwargs: Mapping[str, Any]) -> None:
+    """QuadnavError (exit 2) unless ``function`` can be called with the arguments named
+    ``positional`` (``("world", "start", "goal", "margin")``: how quadnav calls it) and
+    ``kwargs``; a function whose signature Python cannot read passes."""
+    try:
+        parameters = inspect.signature(function)
+    except (TypeError, ValueError):
+        return
+    try:
+        parameters.bind(*positional, **kwargs)
+    except TypeError as error:
+        call = ", ".join([*positional, *(f"{key}=..." for key in kwargs)])
+        name = getattr(function, "__name__", kind)
+        raise QuadnavError(f"{kind} {text}: cannot be called as {name}({call}): "
+                           f"{error}") from None
+
+
+def takes_keyword(function: Callable, name: str) -> bool:
+    """Whether ``function`` has a parameter called ``name`` that can be given by keyword
+    (False when Python cannot read its signature)."""
+    try:
+        parameter = inspect.signature(function).parameters.get(name)
+    except (TypeError, ValueError):
+        return False
+    return parameter is not None and parameter.kind in (
+        inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+
+
+def raised_in(kind: str, text: str, where: str | None, error: Exception,
+              exit_code: int = 1) -> PluginError:
+    """The :class:`PluginError` for ``error``, raised by the plug-in ``text`` (in ``where``,
+    e.g. ``"update(0.5)"``, when given), with its own traceback: exit 1 by default, a
+    flight or plan that failed because of the plug-in."""
+    place = f": {where}" if where else ""
+    return PluginError(f"{kind} {text}{place} raised {type(error).__name__}: {error}",
+                       details=user_traceback(error), exit_code=exit_code)

@@ -81,7 +81,7 @@ class Tracking:
         gains: the controller's own gains (None for a controller without any).
         settings: the simulation settings flown with (a step's record rate raised to the
             control rate).
-        controller: the controller's name (``cascade``, ``se3``, ...).
+        controller: the controller's name or spec (``cascade``, ``se3``, ...).
     """
 
     reference: Reference
@@ -182,8 +182,8 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
         settings: rates, settling time, goal tolerance, disturbances, seed; a step is
             recorded at the control rate whatever the record rate.
         progress: called with the fraction of the flight simulated.
-        controller: the controller by name (:data:`~quadnav.control.registry.CONTROLLERS`)
-            or a plug-in spec.
+        controller: the controller by name or spec
+            (:func:`~quadnav.control.registry.make_controller`).
 
     Raises:
         QuadnavError: a flight too long for the rates (see

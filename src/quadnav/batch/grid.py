@@ -58,9 +58,10 @@ from quadnav.limits import (
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
 from quadnav.missionconfig import SPREAD_PARTS, Spread
 from quadnav.planning import get_planner
+from quadnav.plugins import PluginError
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import METHODS, TIMINGS
-from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names, vehicle_forms
 from quadnav.world import read_start_goal
 from quadnav.world.builtin import is_builtin_spec
 from quadnav.world.courses import MAP, is_course_name, read_course_file
@@ -88,7 +89,8 @@ class FixedSettings:
     Attributes:
         accel: largest acceleration of the trajectories, m/s^2.
         margin: safety margin of maps without their own, m (None: the map's, else 0.2).
-        vehicle: a vehicle preset name or a TOML file (resolved path).
+        vehicle: a vehicle preset name, a TOML file (resolved path) or a rotorpy dict
+            (``module:NAME`` or ``file.py:NAME``, its file resolved).
         settle: time flown after each trajectory ends, s.
         method: trajectory shape (:data:`~quadnav.trajectory.generate.METHODS`).
         timing: segment timing (:data:`~quadnav.trajectory.generate.TIMINGS`).
@@ -366,6 +368,26 @@ def _named(value: Any, folder: Path, is_name: Callable[[str], bool]) -> bool:
     return isinstance(value, str) and is_name(value) and not (folder / value).is_file()
 
 
+def _vehicle(value: Any, folder: Path, src: _Source) -> str:
+    """A vehicle preset, a TOML file (resolved), or a rotorpy dict named ``module:NAME`` or
+    ``file.py:NAME`` (the file resolved; checked here, before any mission flies)."""
+    if value in preset_names():
+        return value
+    if _named(value, folder, lambda text: ":" in text):
+        where, _, name = value.partition(":")
+        if where.endswith(".py"):
+            value = f"{os.path.abspath(folder / Path(where).expanduser())}:{name}"
+        try:
+            load_params(value)
+        except QuadnavError as error:
+            located = src.error("vehicle", str(error))
+            if isinstance(error, PluginError):  # keep the user code's traceback
+                raise PluginError(str(located), error.details, error.exit_code) from None
+            raise located from None
+        return value
+    return _file(value, folder, "vehicle", vehicle_forms(), src)
+
+
 def _map_name(value: Any, folder: Path, key: str, src: _Source) -> str:
     """A map file (resolved), a built-in world spec, or a course map (``course:NAME``,
     shipped or fetched: checked here, before any mission flies)."""
@@ -432,9 +454,5 @@ def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
         values["method"] = _choice(table["method"], tuple(METHODS.names()), "method", src)
     if "timing" in table:
         values["timing"] = _choice(table["timing"], TIMINGS, "timing", src)
-    vehicle = table.get("vehicle", base.vehicle)
-    if vehicle not in preset_names():
-        vehicle = _file(vehicle, folder, "vehicle",
-                        f"a vehicle preset ({', '.join(preset_names())}) or a TOML file", src)
-    values["vehicle"] = vehicle
+    values["vehicle"] = _vehicle(table.get("vehicle", base.vehicle), folder, src)
     return FixedSettings(**{**base.__dict__, **values})

@@ -144,8 +144,12 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
     def default(value):
         return None if unset else value
 
-    parser.add_argument("--planner", default=default("rrtstar"), metavar="NAME",
-                        help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    parser.add_argument("--planner", default=default("rrtstar"), metavar="NAME|SPEC",
+                        help=f"one of {', '.join(planner_names())}, or a function of your "
+                             "own, module:FUNCTION or path/to/file.py:FUNCTION, optionally "
+                             "with literal keyword arguments, FUNCTION(key=value, ...), called "
+                             "as FUNCTION(world, start, goal, margin) -> path (N, 3) "
+                             "(default: rrtstar)")
     parser.add_argument("--time", type=plan_time, default=default(time), metavar="S",
                         help=f"search time budget, {PLAN_TIME.describe()} (default: {time:g})")
     add_seed_argument(parser, "random seed", unset)

@@ -30,7 +30,7 @@ from quadnav.limits import Range
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
 from quadnav.planning import planner_names
 from quadnav.runfolder import check_output_folder
-from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+from quadnav.vehicle.params import DEFAULT_PRESET, vehicle_forms
 
 #: Seeds of the simple case when --seeds is not given.
 DEFAULT_SEEDS = 10
@@ -155,12 +155,13 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
     add_margin_argument(p)
     add_start_goal_arguments(p)
     p.add_argument("--params", metavar="NAME|FILE",
-                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                        f"(default: {DEFAULT_PRESET})")
+                   help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     p.add_argument("--gains", metavar="NAME|FILE",
                    help="controller gains: a TOML file or a course gain table (as in fly)")
-    p.add_argument("--planner", metavar="NAME",
-                   help=f"one of {', '.join(planner_names())} (default: rrtstar)")
+    p.add_argument("--planner", metavar="NAME|SPEC",
+                   help=f"one of {', '.join(planner_names())}, or a function of your own, "
+                        "module:FUNCTION or path/to/file.py:FUNCTION (as in fly; default: "
+                        "rrtstar)")
     add_executor_arguments(p)
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")

@@ -17,6 +17,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import (
     add_controller_argument,
+    add_duration_argument,
     add_simulation_arguments,
     add_strict_argument,
     add_timing_arguments,
@@ -106,10 +107,12 @@ def print_summary(mission: Mission) -> bool:
     """Print the outcome and headline figures of ``mission``, a few lines, and a warning
     line on stderr when the flight kept less margin than asked; returns whether it did."""
     m = mission.metrics()
-    controller = mission.settings.controller
+    controller, reference = mission.settings.controller, mission.settings.reference
     flown_by = "" if controller == DEFAULT_CONTROLLER else f", controller {controller}"
+    along = (f"top speed {m['speed_m_s']:.3g} m/s" if reference is None
+             else f"reference {reference}")
     print(f"{m['map']}: {'success' if m['success'] else 'FAILED'}, {m['planner']} seed "
-          f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, top speed {m['speed_m_s']:.3g} m/s")
+          f"{m['seed']}, vehicle {m['vehicle']}{flown_by}, {along}")
     if mission.flight is None:
         print(f"  no path after {m['planning_time_s']:.2f} s of planning")
         return False
@@ -156,6 +159,14 @@ def add_fly_command(subparsers: argparse._SubParsersAction) -> None:
                         ": one budget for speeding up, braking and turning (default: "
                         f"{DEFAULT_ACCELERATION:g}; ignored with --speed max)")
     add_timing_arguments(p, unset=True)
+    p.add_argument("--reference", metavar="SPEC",
+                   help="fly a trajectory class of your own instead of quadnav's trajectory "
+                        "(--speed, --accel, --method and --timing then do not apply): "
+                        "module:Class or path/to/file.py:Class in rotorpy's shape, optionally "
+                        "with literal keyword arguments, Class(key=value, ...); built with "
+                        "the path (shortcut, not smoothed) as points=(N, 3) when it takes "
+                        "points, its update(t) sampled at the control rate")
+    add_duration_argument(p)
     add_vehicle_arguments(p, unset=True)
     add_controller_argument(p, unset=True)
     add_planner_arguments(p, time=DEFAULT_TIME_CAP, iterations=0, improve=DEFAULT_IMPROVE,

@@ -6,11 +6,13 @@ mission file build the same mission from the same settings."""
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
+from quadnav.cli.flight_args import wind_arguments
 from quadnav.missionconfig import MISSION_FILE, MissionConfig, read_mission
 
 #: Each flag that sets a mission, by its argparse dest: its name and the key of a mission
-#: file it sets.
+#: file it sets (``--wind`` sets the wind model's key too: :func:`flag_keys`).
 MISSION_FLAGS = {
     "map": ("MAP", "map"),
     "seed": ("--seed", "seed"),
@@ -27,6 +29,8 @@ MISSION_FLAGS = {
     "timing": ("--timing", "trajectory.timing"),
     "speed": ("--speed", "trajectory.speed"),
     "accel": ("--accel", "trajectory.accel"),
+    "reference": ("--reference", "trajectory.reference"),
+    "duration": ("--duration", "trajectory.duration"),
     "controller": ("--controller", "controller.name"),
     "gains": ("--gains", "controller.gains"),
     "physics_rate": ("--physics-rate", "simulation.physics_rate"),
@@ -55,6 +59,18 @@ def mission_config(args: argparse.Namespace, base: MissionConfig | None = None
         base = read_mission(mission_file)
     given = {dest: getattr(args, dest) for dest in MISSION_FLAGS
              if getattr(args, dest, None) is not None}
-    changes = {MISSION_FLAGS[dest][1]: value for dest, value in given.items()}
-    names = {MISSION_FLAGS[dest][1]: MISSION_FLAGS[dest][0] for dest in given}
+    changes = {key: value for dest, value in given.items()
+               for key, value in flag_keys(dest, value).items()}
+    names = {key: MISSION_FLAGS[dest][0] for dest, value in given.items()
+             for key in flag_keys(dest, value)}
     return (base or MissionConfig()).with_changes(changes, names)
+
+
+def flag_keys(dest: str, value: Any) -> dict[str, Any]:
+    """The keys of a mission that the flag ``dest`` given as ``value`` sets: its key of
+    :data:`MISSION_FLAGS`; for ``--wind``, FX FY FZ or one wind model's spec, the whole
+    wind, the steady force and the wind model (one of them none)."""
+    if dest == "wind":
+        force, model = wind_arguments(value)
+        return {"disturbances.wind": force, "disturbances.wind_model": model}
+    return {MISSION_FLAGS[dest][1]: value}

@@ -1,5 +1,6 @@
-"""``quadnav track``: fly a given reference — a built-in one, a trajectory.csv or the course's
-MP.csv — and report how well it was tracked (the course's gain-tuning workflow)."""
+"""``quadnav track``: fly a given reference — a built-in one, a trajectory.csv, the course's
+MP.csv or a trajectory class of your own — and report how well it was tracked (the course's
+gain-tuning workflow)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import (
     add_controller_argument,
+    add_duration_argument,
     add_simulation_arguments,
     add_vehicle_arguments,
     simulation_settings,
@@ -26,6 +28,8 @@ from quadnav.errors import QuadnavError
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.settings import SimSettings
+from quadnav.trajectory.plain import FORMAT as CLASS_FORMAT
+from quadnav.trajectory.plain import is_trajectory_class
 from quadnav.trajectory.reference import Reference
 from quadnav.trajectory.sampled import COURSE_MP_RATE, MP_FORMAT, MP_RATE, TABLE_FORMAT
 
@@ -40,7 +44,11 @@ def track(args: argparse.Namespace) -> int:
     folder = check_output_folder(args.output)
     vehicle, gains = vehicle_and_gains(args)
     settings = simulation_settings(args)
-    reference = load_reference(args.reference, args.rate or COURSE_MP_RATE)
+    if args.duration is not None and not is_trajectory_class(args.reference):
+        raise QuadnavError(f"--duration: applies only to a trajectory class of your own "
+                           f"(module:Class or path/to/file.py:Class), not to {args.reference}")
+    reference = load_reference(args.reference, args.rate or COURSE_MP_RATE,
+                               1.0 / settings.control_rate, args.duration)
     if args.rate is not None and getattr(reference, "format", None) != MP_FORMAT:
         raise QuadnavError(f"--rate: applies only to an MP.csv file (which has no times), "
                            f"not to {args.reference}")
@@ -69,6 +77,11 @@ def how_read(reference: Reference) -> str:
     if info.get("format") == TABLE_FORMAT:
         return (f"{reference.name}: {info['samples']:,} samples at their own times "
                 f"(column t): {duration}")
+    if info.get("format") == CLASS_FORMAT:
+        said = {"given": "--duration", "duration": "its duration",
+                "t_keyframes": "its t_keyframes"}[info["duration_from"]]
+        return (f"{reference.name}: update(t) sampled {info['samples']:,} times, every "
+                f"{info['sample_interval_s']:g} s (the control rate): {duration} ({said})")
     return f"{reference.name}: {duration}"
 
 
@@ -106,12 +119,17 @@ def add_track_command(subparsers: argparse._SubParsersAction) -> None:
                         "step:axis=z,size=0.5 or helix:radius=2,speed=1.5; or a file: "
                         "quadnav's trajectory.csv (header t,x,y,...,yaw: its own times) "
                         "or the course's MP.csv (9 rows x, y, z, vx, vy, vz, ax, ay, az, one "
-                        "column per sample, read as every 1/--rate s)")
+                        "column per sample, read as every 1/--rate s); or a trajectory "
+                        "class of your own in rotorpy's shape, module:Class or "
+                        "path/to/file.py:Class, optionally with literal keyword arguments, "
+                        "Class(key=value, ...): update(t) returns the flat outputs x, x_dot, "
+                        "x_ddot, yaw, yaw_dot, sampled at the control rate")
     p.add_argument("--rate", type=number_in(MP_RATE), metavar="HZ",
                    help=f"columns per second of an MP.csv, {MP_RATE.describe()} (default: "
                         f"{COURSE_MP_RATE:g}, as the course's code plays it: one column every "
                         f"{1 / COURSE_MP_RATE:g} s; quadnav traj writes one every --dt, 0.01 "
                         "s by default: --rate 100)")
+    add_duration_argument(p)
     add_vehicle_arguments(p)
     add_controller_argument(p)
     add_seed_argument(p, "seed of the gusts")

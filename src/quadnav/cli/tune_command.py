@@ -11,7 +11,7 @@ from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
 from quadnav.runfolder import check_output_folder
-from quadnav.vehicle.params import DEFAULT_PRESET, preset_names
+from quadnav.vehicle.params import DEFAULT_PRESET, vehicle_forms
 
 #: Trials a study may hold, and trials asked at once.
 TRIALS = Range(1, 100_000, whole=True)
@@ -135,8 +135,7 @@ def add_tune_command(subparsers: argparse._SubParsersAction) -> None:
                     "(or --storage), so an interrupted study resumes. Exit 0 when done, 2 on "
                     "bad input, 130/143 when stopped.")
     p.add_argument("--params", default=DEFAULT_PRESET, metavar="NAME|FILE",
-                   help=f"vehicle: a preset ({', '.join(preset_names())}) or a TOML file "
-                        f"(default: {DEFAULT_PRESET})")
+                   help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     p.add_argument("--gains", metavar="NAME|FILE",
                    help="starting gains: a TOML file or a course gain table (default: the "
                         "vehicle's own)")

@@ -21,6 +21,10 @@ One call of :func:`control` runs every loop once (the same rate for all):
 6. **Mixer** (:func:`quadnav.vehicle.rotors.mix`): collective thrust along the current
    body z and the torques to per-rotor thrusts, then motor commands in [0, 1].
 
+:func:`velocity_control`, :func:`attitude_control` and :func:`rate_control` enter the
+cascade at step 2, 4 or 5 with a setpoint of that loop: the inner loops that a plain-Python
+controller's velocity, attitude or body-rate commands go through (:mod:`.held`).
+
 The controller's memory (integrals, filters, previous values) is a float64 array of
 :data:`MEMORY_SIZE`; start from :func:`new_memory`.
 """
@@ -174,10 +178,9 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
     started = memory[_STARTED] > 0.0
     alpha = _smoothing(g, dt)
     r = quaternion.to_matrix(state[6:10])
-    # the 3-vectors of the steps below, as views of one array (one allocation, not seven)
-    work = np.empty(21)
+    # the 3-vectors of the step below, as views of one array (one allocation, not three)
+    work = np.empty(9)
     position_error, v_sp, raw_v = work[0:3], work[3:6], work[6:9]
-    velocity_error, a_sp, force, unlimited = work[9:12], work[12:15], work[15:18], work[18:21]
 
     # 1. position -> velocity setpoint
     for a in range(3):
@@ -196,6 +199,29 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
             memory[_POSITION_INTEGRAL + a] = _clip(
                 memory[_POSITION_INTEGRAL + a] + g.position[1, a] * position_error[a] * dt,
                 g.position[3, a])
+    return _velocity_loops(memory, state, r, v_sp, reference, g, v, dt, alpha, started)
+
+
+@njit(cache=True)
+def velocity_control(memory: np.ndarray, state: np.ndarray, v_sp: np.ndarray,
+                     reference: np.ndarray, g: GainArrays, v: VehicleArrays,
+                     dt: float) -> np.ndarray:
+    """Steps 2-6 alone: motor commands (4,) in [0, 1] that bring the measured ``state``
+    (17,) to the velocity setpoint ``v_sp`` (3,) m/s, world frame, with the reference row's
+    acceleration as feed-forward, the drag at its velocity, its yaw and yaw rate
+    (:data:`REFERENCE_SIZE`,). Updates ``memory``."""
+    return _velocity_loops(memory, state, quaternion.to_matrix(state[6:10]), v_sp, reference,
+                           g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
+
+
+@njit(cache=True)
+def _velocity_loops(memory, state, r, v_sp, reference, g: GainArrays, v: VehicleArrays, dt,
+                    alpha, started) -> np.ndarray:
+    """Steps 2-6 of the cascade (see :func:`velocity_control`), given the body-to-world
+    rotation ``r`` (3, 3) of ``state`` and the derivative filters' ``alpha``."""
+    # the 3-vectors of the steps below, as views of one array (one allocation, not four)
+    work = np.empty(12)
+    velocity_error, a_sp, force, unlimited = work[0:3], work[3:6], work[6:9], work[9:12]
 
     # 2. velocity -> acceleration setpoint
     for a in range(3):
@@ -233,11 +259,21 @@ def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: Gai
 def attitude_control(memory: np.ndarray, state: np.ndarray, q_sp: np.ndarray,
                      collective: float, yaw_rate: float, g: GainArrays, v: VehicleArrays,
                      dt: float) -> np.ndarray:
-    """The inner loops alone: motor commands (4,) in [0, 1] that turn the measured
-    ``state`` (17,) to the attitude ``q_sp`` (4,) with ``collective`` thrust N along body
-    z, plus a world yaw rate feed-forward ``yaw_rate`` rad/s. Updates ``memory``."""
+    """Steps 4-6 alone: motor commands (4,) in [0, 1] that turn the measured ``state``
+    (17,) to the attitude ``q_sp`` (4,) with ``collective`` thrust N along body z, plus a
+    world yaw rate feed-forward ``yaw_rate`` rad/s. Updates ``memory``."""
     return _inner_loops(memory, state, quaternion.to_matrix(state[6:10]), q_sp, collective,
                         yaw_rate, g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
+
+
+@njit(cache=True)
+def rate_control(memory: np.ndarray, state: np.ndarray, w_sp: np.ndarray, collective: float,
+                 g: GainArrays, v: VehicleArrays, dt: float) -> np.ndarray:
+    """Steps 5-6 alone: motor commands (4,) in [0, 1] that bring the measured body rates
+    of ``state`` (17,) to ``w_sp`` (3,) rad/s (limited per axis) with ``collective``
+    thrust N along body z. Updates ``memory``."""
+    return _rate_loop(memory, state, w_sp, collective, g, v, dt, _smoothing(g, dt),
+                      memory[_STARTED] > 0.0)
 
 
 @njit(cache=True)
@@ -248,16 +284,23 @@ def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
     # 4. attitude -> body rate setpoint
     q_error = quaternion.multiply(quaternion.conjugate(state[6:10]), q_sp)
     sign = 1.0 if q_error[0] >= 0.0 else -1.0
+    w_sp = np.empty(3)
+    for b in range(3):
+        w_sp[b] = 2.0 * g.attitude_kp[b] * sign * q_error[1 + b] + r[2, b] * yaw_rate
+    return _rate_loop(memory, state, w_sp, collective, g, v, dt, alpha, started)
 
+
+@njit(cache=True)
+def _rate_loop(memory, state, w_sp, collective, g: GainArrays, v: VehicleArrays, dt, alpha,
+               started) -> np.ndarray:
+    """Steps 5-6 of the cascade (see :func:`rate_control`)."""
     # 5. body rate -> torque, written into the wrench the mixer takes
     wrench = np.empty(4)
     wrench[0] = collective
     torque = wrench[1:4]
     saturated = memory[MIXER_SATURATED] > 0.0
     for b in range(3):
-        w_sp = _clip(2.0 * g.attitude_kp[b] * sign * q_error[1 + b] + r[2, b] * yaw_rate,
-                     g.rate_max[b])
-        e = w_sp - state[10 + b]
+        e = _clip(w_sp[b], g.rate_max[b]) - state[10 + b]
         dw = _filtered_rate(memory, _ANGULAR_ACCELERATION, _PREVIOUS_RATES, state[10 + b], b,
                             dt, alpha, started)
         torque[b] = v.inertia[b] * (g.rate[0, b] * e + memory[_RATE_INTEGRAL + b]

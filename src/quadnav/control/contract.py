@@ -21,12 +21,17 @@ A controller is one compiled step (a numba ``@njit`` function)::
 :class:`Controller` bundles a step with its gains and memory size;
 ``examples/custom_controller.py`` is a template, :mod:`quadnav.control.cascade` and
 :mod:`quadnav.control.se3` are the built-in ones (``--controller``).
+
+A plain-Python controller (:mod:`quadnav.control.plain`) is a Controller too:
+its compiled step (:mod:`quadnav.control.held`) flies the commands that its Python side
+(:class:`PythonSide`) holds in its memory, set before each control step; the closed loop
+then runs one control step per call (:func:`quadnav.sim.simulate.simulate`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numba
 import numpy as np
@@ -38,21 +43,35 @@ from quadnav.arrays import FloatArray
 SATURATED = 0
 
 
+class PythonSide(Protocol):
+    """The Python half of a controller, run before each of its compiled steps."""
+
+    def before_step(self, memory: FloatArray, t: float, state: FloatArray,
+                    reference: FloatArray, jerk_snap: FloatArray, wind: FloatArray) -> None:
+        """Set in ``memory`` what the compiled step flies next, at ``t`` s, for the measured
+        ``state`` (17,), the ``reference`` row (11,), the reference's jerk and snap (6,),
+        m/s^3 and m/s^4, and the wind's velocity (3,) m/s."""
+        ...
+
+
 @dataclass(frozen=True, eq=False)
 class Controller:
     """A compiled controller, ready to fly.
 
     Attributes:
-        name: how it is reported, e.g. ``"cascade"``.
+        name: how it is reported, e.g. ``"cascade"``, or the spec it was named by.
         step: the compiled step (see the module docstring).
         gains: its compiled gains, passed to every step.
         memory_size: length of its memory array (at least 1: slot :data:`SATURATED`).
+        python: for a plain-Python controller, its Python side, run before every step;
+            None for a compiled one.
     """
 
     name: str
     step: Any
     gains: Any
     memory_size: int
+    python: PythonSide | None = None
 
     def new_memory(self) -> FloatArray:
         """Fresh memory: every slot 0."""

@@ -24,7 +24,8 @@ some axis's loop is unstable (a gain margin of at most 1) is refused; one that l
 the textbook's 2 (6 dB, :data:`GAIN_MARGIN`) is warned about. What the default gains keep,
 and the lowest rates they are stable at, are in docs/flying.md (*Control rate*);
 ``tests/test_control_rate.py`` checks them, and the lowest stable rates against the rates at
-which the simulated loop turns unstable. A controller of another kind is not checked.
+which the simulated loop turns unstable. A controller of another kind (a plain-Python one
+too) is not checked.
 """
 
 from __future__ import annotations
@@ -64,8 +65,11 @@ class AxisLoop(NamedTuple):
 
 def axis_loops(controller: Controller) -> list[AxisLoop] | None:
     """The three body axes' loops of a built-in controller (cascade or SE(3), known by the
-    type of its gains), or None for any other."""
+    type of its gains), or None for any other (a plain-Python controller too: its own code
+    decides which of the cascade's loops it flies through)."""
     g = controller.gains
+    if controller.python is not None:
+        return None
     if isinstance(g, GainArrays):
         return [AxisLoop(float(g.attitude_kp[b]), *(float(g.rate[k, b]) for k in range(3)),
                          float(g.derivative_cutoff)) for b in range(3)]

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from quadnav.arrays import FloatArray
-from quadnav.config import require, vector_field
+from quadnav.config import frozen_vector, require, vector_field
 from quadnav.control.contract import SATURATED, Controller
 from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
@@ -64,6 +64,8 @@ class SE3Gains:
     kw: FloatArray = vector_field(46.64, 46.64, 20.0)
 
     def __post_init__(self) -> None:
+        for k in ("kx", "kv", "kr", "kw"):  # any three numbers, kept as read-only arrays
+            object.__setattr__(self, k, frozen_vector(getattr(self, k), 3))
         require([(bool(np.all(getattr(self, k) >= 0)), f"{k} must be >= 0, got "
                   f"{getattr(self, k).tolist()}") for k in ("kx", "kv", "kr", "kw")])
 

@@ -461,7 +461,7 @@ class EmulatedDrone:
         for k in range(steps):
             positions[k] = self._state[0:3]
             for _ in range(self.settings.substeps):
-                rk4_step(self._state, off, self._vehicle, still,
+                rk4_step(self._state, off, self._vehicle, still, still,
                          self._dt / self.settings.substeps, self.floor, work)
         if self._state[2] <= self.floor + 1e-6 and abs(self._state[5]) < 1e-6:
             self.falling = False

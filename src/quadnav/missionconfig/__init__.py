@@ -7,7 +7,8 @@ defaults::
 
     map = "course:rbe595/map1"    # a map file, a built-in world spec or a course map
     seed = 0                      # the planner's, the gusts', the vehicle spread's
-    vehicle = "tello"             # a preset or a vehicle TOML file, or a [vehicle] table
+    vehicle = "tello"             # a preset, a vehicle TOML file, a rotorpy dict
+                                  # (module:NAME, file.py:NAME), or a [vehicle] table
 
     [query]
     start = [0.1, -4.9, 0.2]      # m; default: the start/goal file's, else the map's own
@@ -27,11 +28,13 @@ defaults::
     timing = "fastest"
     speed = 2.0                   # m/s, or "max"
     accel = 3.0                   # m/s^2
-    reference = "my_ref.py:Circle(radius=2)"   # a plain-Python reference flown instead
+    reference = "my_ref.py:Circle(radius=2)"   # a trajectory class flown instead
+    duration = 10.0               # s, how long the reference is flown (default: its own)
 
     [controller]
-    name = "cascade"              # or "se3", or a plug-in spec
-    gains = "my_gains.toml"       # a gains file, a course gain table, or a [controller.gains] table
+    name = "cascade"              # or "se3", or a plug-in spec (a plain-Python class)
+    gains = "my_gains.toml"       # a gains file, a course gain table, or a [controller.gains]
+                                  # table (a plain-Python class's: its inner loops')
 
     [simulation]
     physics_rate = 1000.0         # Hz
@@ -40,15 +43,16 @@ defaults::
 
     [disturbances]
     wind = [0.0, 0.0, 0.0]        # N, world frame
-    wind_model = "my_wind.py:Gusty(speed=3)"   # a plain-Python wind, beside the force
+    wind_model = "my_wind.py:Gusty(speed=3)"   # a wind class (a velocity), beside the force
     gusts = 0.0                   # N, standard deviation per axis
     spread = 0.0                  # or {mass = 0.1, thrust = 0.05, drag = 0.2}
 
 Every key is checked by a pydantic schema against the ranges the flags have
 (:mod:`quadnav.limits`); a mistake in a file is one :class:`~quadnav.errors.QuadnavError`
 naming the file, the line and the key (:func:`read_mission`). Plug-ins (the planner, the
-controller, the reference, the wind model, a vehicle named by a spec) travel as their text
-and are loaded where they are used. Relative paths are resolved against the file's folder.
+controller, the reference, the wind model, a vehicle named by a spec) travel as their text:
+each is loaded and checked with the mission (a bad one is refused before any work) and
+built where it is used. Relative paths are resolved against the file's folder.
 
 :meth:`MissionConfig.settings` is the one builder of
 :class:`~quadnav.mission.MissionSettings` and :meth:`MissionConfig.problem` of the checked

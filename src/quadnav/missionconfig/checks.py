@@ -13,7 +13,6 @@ from pydantic_core import PydanticCustomError
 
 from quadnav.errors import QuadnavError
 from quadnav.limits import COORDINATE, SPEED, Range, Speed, speed_value
-from quadnav.plugins import parse_spec
 
 
 def fail(message: str) -> PydanticCustomError:
@@ -94,18 +93,19 @@ def top_speed(value: Any) -> Speed:
     return found
 
 
-def plugin_text(kind: str) -> Callable[[str], None]:
-    """A plug-in named by its text (checked for form here, loaded where it is used)."""
-    return lambda value: parse_spec(value, kind)
-
-
 def file(value: Any, info: ValidationInfo) -> Any:
-    """A string naming an existing file relative to the mission file's folder, or a plug-in
-    in such a file (``path/to/file.py:Name(...)``): the same with the file's absolute path;
-    any other value as it is (a preset, a built-in world, a course map, a module)."""
+    """:func:`located` against the mission file's folder, for a string read from one; any
+    other value as it is."""
     folder = (info.context or {}).get("folder")
     if not isinstance(value, str) or folder is None:
         return value
+    return located(value, folder)
+
+
+def located(value: str, folder: str | Path) -> str:
+    """``value`` naming an existing file relative to ``folder``, or a plug-in in such a file
+    (``path/to/file.py:Name(...)``): the same with the file's absolute path; any other
+    value as it is (a preset, a built-in world, a course map, a module)."""
     where, colon, name = value.partition(":")
     named, rest = (where, colon + name) if colon and where.endswith(".py") else (value, "")
     path = Path(folder) / named

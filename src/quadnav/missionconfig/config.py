@@ -20,7 +20,7 @@ from quadnav.control.registry import controller_gains
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_SPEED, SEED
 from quadnav.mission import DEFAULT_SPEED, Mission, MissionSettings, fly_problem
-from quadnav.missionconfig.checks import FileOrName, TextOrTable, number
+from quadnav.missionconfig.checks import FileOrName, TextOrTable, located, number
 from quadnav.missionconfig.sections import (
     Controller,
     Disturbances,
@@ -199,6 +199,7 @@ class MissionConfig(Section):
                 gains=files.gains,
                 controller=self.controller.name,
                 reference=self.trajectory.reference,
+                reference_duration=self.trajectory.duration,
                 sim=SimSettings(physics_rate=self.simulation.physics_rate,
                                 control_rate=self.simulation.control_rate,
                                 record_rate=default_record_rate(self.simulation.control_rate),
@@ -237,9 +238,11 @@ class MissionConfig(Section):
     def flown(self, mission: Mission) -> MissionConfig:
         """What a run folder keeps of ``mission``, flown from this config, so that it flies
         again exactly wherever it is read: its start, goal and margin as flown (no
-        start/goal file), a map file by its absolute path, the vehicle by its preset's
-        name when it is a preset, else by its values, and the gains by their values when
-        they are not the vehicle's own."""
+        start/goal file), a map file and the plug-ins in files (planner, controller,
+        reference, wind model) by their absolute paths, the vehicle by its preset's name
+        when it is a preset, else by its values (a vehicle file's or a rotorpy dict's: the
+        vehicle as flown, whatever becomes of the file or the package it came from), and
+        the gains by their values when they are not the vehicle's own."""
         settings, problem = mission.settings, mission.problem
         vehicle: str | dict = _values(settings.vehicle)
         if settings.vehicle.name in preset_names() and vehicle == _values(
@@ -250,9 +253,20 @@ class MissionConfig(Section):
         gains = None if flown == _values(own) else flown
         query = Query(start=tuple(problem.start), goal=tuple(problem.goal_asked),
                       margin=problem.margin)
-        changes = {"map": os.path.abspath(self.map) if Path(self.map).is_file() else self.map,
-                   "vehicle": vehicle, "query": query,
-                   "controller": self.controller.model_copy(update={"gains": gains})}
+        here = os.getcwd()
+
+        def plugin(text: str | None) -> str | None:
+            return None if text is None else located(text, here)
+
+        changes = {
+            "map": located(self.map, here), "vehicle": vehicle, "query": query,
+            "planner": self.planner.model_copy(update={"name": plugin(self.planner.name)}),
+            "trajectory": self.trajectory.model_copy(
+                update={"reference": plugin(self.trajectory.reference)}),
+            "controller": self.controller.model_copy(
+                update={"name": plugin(self.controller.name), "gains": gains}),
+            "disturbances": self.disturbances.model_copy(
+                update={"wind_model": plugin(self.disturbances.wind_model)})}
         return self.model_copy(update=changes)
 
     # ------------------------------------------------------------------------ messages
@@ -306,13 +320,15 @@ def spread_factors(spread: Spread, seed: int) -> tuple[float, float, float]:
 
 
 def spread_plant(vehicle: VehicleParams, spread: Spread, seed: int) -> VehicleParams | None:
-    """``vehicle`` scaled by :func:`spread_factors`, or None when no factor differs from 1."""
+    """``vehicle`` scaled by :func:`spread_factors` (the drag factor scales its linear,
+    rotor and parasitic drag alike), or None when no factor differs from 1."""
     mass, thrust, drag = spread_factors(spread, seed)
     if (mass, thrust, drag) == (1.0, 1.0, 1.0):
         return None
     return vehicle.replace(mass=vehicle.mass * mass,
                            thrust_coefficient=vehicle.thrust_coefficient * thrust,
-                           drag=vehicle.drag * drag)
+                           drag=vehicle.drag * drag, rotor_drag=vehicle.rotor_drag * drag,
+                           parasitic_drag=vehicle.parasitic_drag * drag)
 
 
 # ----------------------------------------------------------------------- mission files

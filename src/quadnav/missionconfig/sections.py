@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict
+from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationInfo, field_validator
 
-from quadnav.control.registry import DEFAULT_CONTROLLER, controller_factory
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class
 from quadnav.limits import (
     ACCELERATION,
     FORCE,
@@ -30,14 +30,16 @@ from quadnav.missionconfig.checks import (
     flag,
     is_number,
     number,
-    plugin_text,
     text,
     top_speed,
     vector,
 )
 from quadnav.planning import get_planner
 from quadnav.sim.settings import SimSettings
+from quadnav.sim.wind import wind_maker
 from quadnav.trajectory.generate import METHODS, TIMINGS
+from quadnav.trajectory.plain import load_trajectory_class
+from quadnav.trajectory.references import DURATION
 
 #: The parts of the vehicle a spread scales, in the order its factors are drawn.
 SPREAD_PARTS = ("mass", "thrust", "drag")
@@ -84,6 +86,11 @@ class Planner(Section):
     refine: Annotated[bool, BeforeValidator(flag)] = True
 
 
+def _reference_class(text: str) -> None:
+    """The check of a reference: a trajectory class, loaded, to be built from a path."""
+    load_trajectory_class(text, with_points=True)
+
+
 class Trajectory(Section):
     """``[trajectory]``: the trajectory stage.
 
@@ -92,16 +99,27 @@ class Trajectory(Section):
         timing: how its segments are timed (:data:`~quadnav.trajectory.generate.TIMINGS`).
         speed: top speed, m/s, or ``"max"``: as fast as the vehicle can follow.
         accel: largest acceleration, m/s^2 (ignored with ``"max"``).
-        reference: a plain-Python reference (a plug-in spec) flown instead of the
-            trajectory made through the path; None: that trajectory.
+        reference: a trajectory class of your own (a plug-in spec,
+            :mod:`quadnav.trajectory.plain`) flown instead of the trajectory made through
+            the path; None: that trajectory.
+        duration: how long ``reference`` is flown, s; None: as long as it says it lasts.
     """
 
     method: Annotated[str, text(choice(METHODS.names))] = "minsnap"
     timing: Annotated[str, text(choice(lambda: TIMINGS))] = "fastest"
     speed: Annotated[Speed, BeforeValidator(top_speed)] = DEFAULT_SPEED
     accel: Annotated[float, number(ACCELERATION)] = DEFAULT_ACCELERATION
-    reference: Annotated[str | None, text(plugin_text("reference"), optional=True),
+    reference: Annotated[str | None, text(_reference_class, optional=True),
                          BeforeValidator(file)] = None
+    duration: Annotated[float | None, number(DURATION, optional=True)] = None
+
+    @field_validator("duration")
+    @classmethod
+    def _with_reference(cls, duration: float | None, info: ValidationInfo) -> float | None:
+        if duration is not None and info.data.get("reference") is None:
+            raise fail("applies only to a trajectory class of your own (--reference, a mission "
+                       "file's trajectory.reference)")
+        return duration
 
 
 class Controller(Section):
@@ -113,7 +131,7 @@ class Controller(Section):
             table's name, or a table of keys; None: the vehicle's own.
     """
 
-    name: Annotated[str, text(controller_factory), BeforeValidator(file)] = DEFAULT_CONTROLLER
+    name: Annotated[str, text(controller_class), BeforeValidator(file)] = DEFAULT_CONTROLLER
     gains: TextOrTable = None
 
 
@@ -169,7 +187,7 @@ class Disturbances(Section):
     """
 
     wind: Annotated[tuple[float, float, float], vector(FORCE, "fx, fy, fz")] = (0.0, 0.0, 0.0)
-    wind_model: Annotated[str | None, text(plugin_text("wind model"), optional=True),
+    wind_model: Annotated[str | None, text(wind_maker, optional=True),
                           BeforeValidator(file)] = None
     gusts: Annotated[float, number(GUSTS)] = 0.0
     spread: Annotated[Spread, BeforeValidator(spread_table)] = Spread()

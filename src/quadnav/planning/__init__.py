@@ -1,8 +1,9 @@
 """Path stage: plan a collision-free path through a World.
 
 * :func:`make_problem` — check a start, goal and margin against a world.
-* :func:`plan` — run a planner by name (``rrtstar``, ``ompl:RRTstar``, ...); a goal in
-  sight of the start is joined at once, without a search.
+* :func:`plan` — run a planner by name (``rrtstar``, ``ompl:RRTstar``, ...) or a plain
+  function (``my_astar.py:astar``, :mod:`quadnav.planning.plain`); a goal in sight of the
+  start is joined at once, without a search, but for a plain function, always called.
 * :class:`PlannerSettings` — budget, seed, step, goal bias, ...
 * :class:`PlanResult` — path (N, 3), explored tree and statistics.
 """
@@ -11,12 +12,14 @@ import time
 
 import numpy as np
 
+from quadnav.planning.plain import PlainPlanner
 from quadnav.planning.problem import PlanningProblem, make_problem
 from quadnav.planning.registry import Progress, get_planner, planner_names, register_planner
 from quadnav.planning.result import PlanResult, PlanStats, PostStep, path_length
 from quadnav.planning.settings import PlannerSettings
 
 __all__ = [
+    "PlainPlanner",
     "PlanResult",
     "PlanStats",
     "PlannerSettings",
@@ -40,12 +43,16 @@ def plan(problem: PlanningProblem, settings: PlannerSettings | None = None,
     Args:
         problem: a checked query (:func:`make_problem`).
         settings: budget, seed and tuning; defaults scaled to the map when ``None``.
-        planner: ``rrtstar`` or ``ompl:NAME`` (see :func:`planner_names`).
+        planner: ``rrtstar``, ``ompl:NAME`` (see :func:`planner_names`), or a plain
+            function, ``module:function`` or ``path/to/file.py:function``
+            (:mod:`quadnav.planning.plain`).
         progress: called now and then with (fraction of the budget used, best length).
     """
     search = get_planner(planner)
     settings = settings or PlannerSettings()
-    return direct_result(problem, planner, settings) or search(problem, settings, progress)
+    direct = None if isinstance(search, PlainPlanner) else direct_result(problem, planner,
+                                                                          settings)
+    return direct or search(problem, settings, progress)
 
 
 def direct_result(problem: PlanningProblem, planner: str, settings: PlannerSettings

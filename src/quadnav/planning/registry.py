@@ -1,5 +1,7 @@
-"""Planners by name: ``rrtstar`` (ours), ``ompl:NAME`` (the optional OMPL wheel) and any
-planner registered by :func:`register_planner` or by a package's entry point.
+"""Planners by name: ``rrtstar`` (ours), ``ompl:NAME`` (the optional OMPL wheel), any
+planner registered by :func:`register_planner` or by a package's entry point, and a plain
+function named where it is, ``module:function`` or ``path/to/file.py:function``
+(:mod:`quadnav.planning.plain`: ``function(world, start, goal, margin) -> path (N, 3)``).
 
 Every planner is a function with the :data:`Planner` signature. It searches
 ``problem.free_world`` (the map with its blocks grown by the margin) from
@@ -23,10 +25,11 @@ import importlib.util
 from collections.abc import Callable
 
 from quadnav.errors import QuadnavError
+from quadnav.planning.plain import PlainPlanner
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
 from quadnav.planning.settings import PlannerSettings
-from quadnav.plugins import Registry
+from quadnav.plugins import Registry, parse_spec
 
 #: ``progress(fraction of the budget used in [0, 1], best path length so far or inf)``.
 Progress = Callable[[float, float], None]
@@ -67,7 +70,12 @@ def ompl_available() -> bool:
 
 
 def get_planner(name: str) -> Planner:
-    """The planner called ``name``; QuadnavError naming the choices if there is none."""
+    """The planner called ``name``: a registered one, ``ompl:NAME``, or a plain function
+    named ``module:function`` or ``path/to/file.py:function``, with keyword arguments
+    (a :class:`~quadnav.planning.plain.PlainPlanner`, loaded in this process).
+    QuadnavError naming the choices if there is none, and for a function that cannot be
+    loaded or called as a planner (a :class:`~quadnav.plugins.PluginError` when loading it
+    raised)."""
     if name in PLANNERS:
         return PLANNERS.get(name)
     if name.startswith(OMPL_PREFIX) and name[len(OMPL_PREFIX):] in OMPL_PLANNERS:
@@ -79,4 +87,8 @@ def get_planner(name: str) -> Planner:
         ompl_name = name[len(OMPL_PREFIX):]
         return lambda problem, settings, progress: plan_ompl(problem, settings, ompl_name,
                                                              progress)
-    raise QuadnavError(f"unknown planner {name!r}; expected one of {', '.join(planner_names())}")
+    if not name.startswith(OMPL_PREFIX) and parse_spec(name, "planner").is_located:
+        function, kwargs = PLANNERS.load(name)
+        return PlainPlanner.named(name, function, kwargs)
+    raise QuadnavError(f"unknown planner {name!r}; expected one of {', '.join(planner_names())}"
+                       ", or module:FUNCTION or path/to/file.py:FUNCTION")

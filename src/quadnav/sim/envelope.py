@@ -65,7 +65,7 @@ def vehicle_limits(vehicle: VehicleParams, gains: Gains) -> Limits:
         tilt_max=HEADROOM * math.radians(limits.tilt_max_deg),
         body_rate_max=HEADROOM * math.radians(float(np.min(limits.rate_max_deg[:2]))),
         angular_acceleration_max=TORQUE_HEADROOM * roll_pitch_acceleration_max(vehicle),
-        drag=tuple(float(d) for d in vehicle.drag / vehicle.mass),
+        drag=tuple(float(d) for d in vehicle.hover_drag / vehicle.mass),
     )
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from quadnav.arrays import FloatArray
 from quadnav.config import frozen_vector, require, vector_field
 from quadnav.limits import FORCE, GUSTS, RATE, SEED, SETTLE
+from quadnav.sim.wind import wind_maker
 
 
 @dataclass(frozen=True, eq=False)
@@ -35,6 +36,11 @@ class SimSettings:
             the boundary itself).
         wind: (3,) constant external force, N, world frame (each in
             :data:`~quadnav.limits.FORCE`).
+        wind_model: a wind model named by its spec (:mod:`quadnav.sim.wind`:
+            ``module:Class(key=value, ...)`` or ``path/to/file.py:Class``), whose wind
+            velocity, m/s, the drag acts on, asked once per control step; None for still
+            air. Loaded and checked here (not built), so that a bad one is refused up
+            front; each flight builds its own.
         gust_std: standard deviation of a random external force per axis, N
             (:data:`~quadnav.limits.GUSTS`), redrawn every ``gust_period`` s.
         gust_period: s.
@@ -55,6 +61,7 @@ class SimSettings:
     touchdown_speed: float = 0.7
     boundary_tolerance: float = 0.05
     wind: FloatArray = vector_field(0.0, 0.0, 0.0)
+    wind_model: str | None = None
     gust_std: float = 0.0
     gust_period: float = 0.2
     position_noise: float = 0.0
@@ -73,6 +80,8 @@ class SimSettings:
         SEED.check(self.seed, "seed")
         for force in self.wind:
             FORCE.check(float(force), "wind")
+        if self.wind_model is not None:
+            wind_maker(self.wind_model)
         ratio = self.physics_rate / self.control_rate
         nonnegative = ("boundary_tolerance", "position_noise", "velocity_noise",
                        "attitude_noise", "gyro_noise")

@@ -6,15 +6,29 @@ reference table (position, velocity, acceleration, yaw, yaw rate; held at the en
 the settling time); the wind, gusts and sensor noise are drawn up front from
 ``settings.seed``; then the compiled loop (:mod:`quadnav.sim.loop`) runs the whole flight
 in one call, or, when there is a ``progress`` callback, in chunks of :data:`CHUNK_SECONDS`
-of flight, calling it in between (each call of the loop costs about 0.4 ms of argument
-handling, a tenth of a second of flight's worth of work). The loop is first called for no
-step, which loads it (numba's dispatch: on a process's first flight, a load from numba's
+of flight, calling it in between (each call of the loop costs about 0.03 ms of argument
+handling, what the loop takes to fly a fiftieth of a second). The loop is first called for
+no step, which loads it (numba's dispatch: on a process's first flight, a load from numba's
 cache or a compile), so that its one-off cost is timed apart from the flight's
 (:attr:`~quadnav.sim.flight.Flight.load_time`, :attr:`~quadnav.sim.flight.Flight.wall_time`).
+
+Python at each control step: a plain-Python controller (its
+:attr:`~quadnav.control.contract.Controller.python` side) or a wind model
+(:attr:`~quadnav.sim.settings.SimSettings.wind_model`) needs Python before every control
+step, so the compiled loop then runs one control step per call (:func:`python_steps`):
+first the wind at the vehicle's position, then the controller's ``update`` on the measured
+state (noise and all, as the compiled step sees it), then the step itself, with the
+disturbances, the record, the checks and the metrics the same as ever. The reference's jerk
+and snap, which a Python controller is given, are its own ``jerk(t)`` and ``snap(t)`` where
+it has them (a :class:`~quadnav.trajectory.model.Trajectory`), else finite differences of
+the sampled acceleration. numpy's and Python's global random generators are seeded with
+``settings.seed`` before such a flight, so that a plug-in drawing from them (rotorpy's
+Dryden gusts) flies the same flight from the same seed.
 """
 
 from __future__ import annotations
 
+import random
 import time
 from collections.abc import Callable
 
@@ -29,6 +43,7 @@ from quadnav.sim import loop
 from quadnav.sim.excursion import Excursion, body_excursion
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
+from quadnav.sim.wind import load_wind
 from quadnav.trajectory.reference import Reference
 from quadnav.vehicle.dynamics import ROTORS, STATE_SIZE, hover_state, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams, load_params
@@ -64,12 +79,30 @@ def flight_steps(duration: float, settings: SimSettings) -> int:
 
 def reference_table(trajectory: Reference, dt: float, steps: int) -> FloatArray:
     """(steps, 11) reference rows at times ``k dt``: position, velocity, acceleration,
-    yaw, yaw rate (the yaw's finite difference)."""
+    yaw, yaw rate (the reference's ``yaw_rate(t)`` when it has one, else the yaw's finite
+    difference)."""
     t = np.arange(steps) * dt
     yaw = np.unwrap(np.broadcast_to(trajectory.yaw(t), t.shape))
-    yaw_rate = np.gradient(yaw, dt) if steps > 1 else np.zeros(steps)
+    rate = getattr(trajectory, "yaw_rate", None)
+    yaw_rate = (np.broadcast_to(rate(t), t.shape) if rate is not None
+                else np.gradient(yaw, dt) if steps > 1 else np.zeros(steps))
     return np.column_stack([trajectory.position(t), trajectory.velocity(t),
                             trajectory.acceleration(t), yaw, yaw_rate])
+
+
+def jerk_snap_table(trajectory: Reference, dt: float, steps: int,
+                    references: FloatArray) -> FloatArray:
+    """(steps, 6) jerk m/s^3 and snap m/s^4 at times ``k dt``: the reference's own
+    ``jerk(t)`` and ``snap(t)`` where it has both, else finite differences of the
+    acceleration columns of its ``references`` table (steps, 11)."""
+    t = np.arange(steps) * dt
+    if callable(getattr(trajectory, "jerk", None)) and callable(getattr(trajectory, "snap",
+                                                                        None)):
+        return np.column_stack([trajectory.jerk(t), trajectory.snap(t)])
+    if steps < 2:
+        return np.zeros((steps, 6))
+    jerk = np.gradient(references[:, 6:9], dt, axis=0)
+    return np.column_stack([jerk, np.gradient(jerk, dt, axis=0)])
 
 
 def _disturbances(settings: SimSettings, steps: int, dt: float) -> tuple[FloatArray, FloatArray]:
@@ -134,7 +167,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     memory = controller.new_memory()
     where = loop.scene(world, vehicle.half_size, settings.boundary_tolerance,
                        touchdown=(settings.touchdown_speed, settings.goal_tolerance))
-    acting = loop.Disturbances(forces, noise, settings.noisy)
+    acting = loop.Disturbances(forces, np.zeros((steps, 3)), noise, settings.noisy)
     every = settings.record_every
     record = loop.new_record(steps, every)
     chunk = steps if progress is None else max(1, round(CHUNK_SECONDS / dt))
@@ -144,6 +177,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
                               controller_model, settings.substeps, dt, where, acting, record)
 
     run(0, 0)  # no step: loads the compiled loop, the one-off cost timed apart
+    if controller.python is not None or settings.wind_model is not None:
+        run = python_steps(run, controller, settings, trajectory, state, memory, references,
+                           acting)
     loaded = time.perf_counter()
     done, code = 0, loop.RUNNING
     while done < steps and code == loop.RUNNING:
@@ -178,6 +214,40 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
             t, states[:, 0:3], states[:, 6:10], vehicle.half_size, world.boundary)),
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
+
+
+def python_steps(run: Callable[[int, int], tuple[int, int]], controller: Controller,
+                 settings: SimSettings, trajectory: Reference, state: FloatArray,
+                 memory: FloatArray, references: FloatArray, acting: loop.Disturbances
+                 ) -> Callable[[int, int], tuple[int, int]]:
+    """``run(first, last)`` (control steps ``first..last - 1`` of the compiled loop) as one
+    call per control step, each after the Python parts: the wind model's velocity at the
+    vehicle's position, written into ``acting.wind``, and the controller's Python side,
+    which sets its ``memory`` (see the module docstring). Seeds numpy's and Python's global
+    random generators with ``settings.seed`` and builds the wind model afresh."""
+    np.random.seed(settings.seed)
+    random.seed(settings.seed)
+    wind = None if settings.wind_model is None else load_wind(settings.wind_model)
+    python = controller.python
+    dt = 1.0 / settings.control_rate
+    jerk_snap = (None if python is None
+                 else jerk_snap_table(trajectory, dt, len(references), references))
+
+    def run_each(first: int, last: int) -> tuple[int, int]:
+        for k in range(first, last):
+            t = k * dt
+            if wind is not None:
+                acting.wind[k] = wind.at(t, state[0:3])
+            if python is not None and jerk_snap is not None:
+                seen = loop.measured(state, acting.noise[k]) if acting.noisy else state
+                python.before_step(memory, t, seen, references[k], jerk_snap[k],
+                                   acting.wind[k])
+            code, ran = run(k, k + 1)
+            if code != loop.RUNNING:
+                return code, k - first + ran
+        return loop.RUNNING, last - first
+
+    return run_each
 
 
 def rotor_energy(t: FloatArray, states: FloatArray, params: VehicleParams) -> float:

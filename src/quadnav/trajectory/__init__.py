@@ -6,7 +6,8 @@
 * :class:`Trajectory` — a piecewise polynomial per axis with a yaw reference.
 * :class:`Reference` — what the simulation flies: a Trajectory or anything else with a
   position, velocity, acceleration and yaw over time (built-in shapes in
-  :mod:`.references`, samples read from a file in :mod:`.sampled`).
+  :mod:`.references`, samples read from a file in :mod:`.sampled`, a plain-Python class in
+  rotorpy's shape, ``update(t) -> flat outputs``, sampled in :mod:`.plain`).
 * Generators ``(waypoints (N, 3), segment times (N - 1,)) -> Trajectory``:
   :func:`minimum_snap`, :func:`minimum_snap_qp`, :func:`quintic_segments`,
   :func:`quintic_c2`, :func:`quintic_average`, :func:`cubic_spline`.

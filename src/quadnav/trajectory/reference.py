@@ -11,6 +11,10 @@ velocities m/s, accelerations m/s^2 in the world frame (z up), (3,) for a scalar
 (N, 3) for (N,) times; yaw in rad, a scalar or (N,). Before the start and after the end
 (``duration``) a reference holds still: the first or last position, every derivative zero
 and the first or last yaw.
+
+A reference may also have ``yaw_rate(t)`` (rad/s, the shape of ``yaw``): the closed loop
+then flies that yaw rate (a plain-Python trajectory's ``yaw_dot``,
+:mod:`quadnav.trajectory.plain`) instead of the finite difference of the yaw.
 """
 
 from __future__ import annotations

@@ -32,6 +32,7 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_DURATION, SPEED, Range
 from quadnav.specs import AXIS, FLOAT, INT, Param, SpecError, SpecInfo, describe_params, parse_spec
+from quadnav.trajectory.plain import flat_reference, is_trajectory_class, load_trajectory_class
 from quadnav.trajectory.reference import Reference, Sampling
 from quadnav.trajectory.sampled import COURSE_MP_RATE, is_reference_file, read_reference_file
 from quadnav.trajectory.timelaw import PhaseLaw
@@ -363,17 +364,30 @@ def build_reference(spec: str) -> Reference:
         raise QuadnavError(f"{spec}: {error}") from None
 
 
-def load_reference(source: str | Path, rate: float = COURSE_MP_RATE) -> Reference:
+def load_reference(source: str | Path, rate: float = COURSE_MP_RATE, dt: float | None = None,
+                   duration: float | None = None) -> Reference:
     """A reference from a file (quadnav's trajectory.csv, or an MP.csv read at ``rate``
-    columns per second, Hz: :func:`~quadnav.trajectory.sampled.read_reference_file`) or
-    a built-in reference spec (:func:`build_reference`).
+    columns per second, Hz: :func:`~quadnav.trajectory.sampled.read_reference_file`), a
+    built-in reference spec (:func:`build_reference`), or a trajectory class of your own,
+    ``module:Class`` or ``path/to/file.py:Class`` with literal keyword arguments, built
+    from them and sampled every ``dt`` s (the control interval) for ``duration`` s or as
+    long as it says it lasts (:mod:`quadnav.trajectory.plain`).
 
     Raises:
-        QuadnavError: neither an existing file nor a built-in reference, or a bad one.
+        QuadnavError: none of these, or a bad one (:class:`~quadnav.plugins.PluginError`
+            for a class that fails).
+        ValueError: a trajectory class without ``dt``.
     """
     if is_reference_file(source):
         return read_reference_file(source, rate)
     if is_builtin_reference(str(source)):
         return build_reference(str(source))
-    raise QuadnavError(f"{source}: no such file, and not a built-in reference (built-in: "
-                       f"{', '.join(_TYPES)})")
+    if is_trajectory_class(str(source)):
+        if dt is None:
+            raise ValueError("dt: a trajectory class is sampled every dt s, the control "
+                             "interval")
+        chosen = load_trajectory_class(str(source))
+        return flat_reference(chosen.build(), chosen.text, dt, duration)
+    raise QuadnavError(f"{source}: no such file, not a built-in reference (built-in: "
+                       f"{', '.join(_TYPES)}), and not a trajectory class (module:Class or "
+                       "path/to/file.py:Class)")

@@ -30,7 +30,8 @@ from quadnav.errors import QuadnavError
 from quadnav.planning.legs import leg_world
 from quadnav.trajectory.collision import check_samples
 from quadnav.trajectory.model import Trajectory
-from quadnav.world.margins import box_margins, rounded
+from quadnav.trajectory.plain import FlatOutputReference
+from quadnav.world.margins import box_margins, rounded, segment_box_margins
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
@@ -112,6 +113,21 @@ def trajectory_margins(trajectory: Trajectory, world: World, spacing: float = 0.
     t, _ = check_samples(trajectory, spacing)
     margins = box_margins(world, stretch_boxes(trajectory, t))
     return windowed_margins(t, margins, trajectory.main_window)
+
+
+def reference_margins(reference: Trajectory | FlatOutputReference, world: World
+                      ) -> tuple[float, float | None]:
+    """The margin (per axis, m) ``reference`` keeps from the real blocks and the boundary of
+    ``world``, ``(off the legs, on the legs)`` (:meth:`main_window`): a
+    :class:`~quadnav.trajectory.model.Trajectory` by :func:`trajectory_margins`; a
+    trajectory class's samples (:class:`~quadnav.trajectory.plain.FlatOutputReference`, what
+    the closed loop flies, at the control rate) taken as straight between consecutive
+    samples, each stretch measured by its bounding box, as a flight's track is."""
+    if isinstance(reference, Trajectory):
+        return trajectory_margins(reference, world)
+    samples = reference.samples
+    return windowed_margins(samples.t, segment_box_margins(world, samples.position),
+                            reference.main_window)
 
 
 def within_window(t: FloatArray, window: tuple[float, float]) -> np.ndarray:
