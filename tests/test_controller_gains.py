@@ -95,3 +95,54 @@ def test_fly_and_track_take_gains_for_the_se3_controller(tmp_path):
                                "-o", tmp_path / "x"),
                       f"{gains}: unknown key 'position'; expected one of kx, kv, kr, kw")
     assert not (tmp_path / "x").exists()
+
+
+#: A plain-Python controller commanding body rates (rotorpy's cmd_ctbr), which the cascade's
+#: rate loop flies, and a compiled controller of one's own without a gain table.
+MINE = '''
+from quadnav.control.se3 import se3_controller
+
+
+class Rates:
+    control_abstraction = "cmd_ctbr"
+
+    def __init__(self, quad_params):
+        self.weight = quad_params["mass"] * 9.81
+
+    def update(self, t, state, flat_output):
+        return {"cmd_thrust": self.weight, "cmd_w": [0.0, 0.0, 0.0]}
+
+
+def geometric(vehicle, gains=None):
+    return se3_controller()
+'''
+
+
+def test_one_gains_rule_for_every_controller(tmp_path):
+    """--gains sets the gains of whichever controller flies: the cascade's, SE(3)'s, and a
+    plain-Python controller's inner loops' (the cascade's keys, tuned for the vehicle unless
+    given); a compiled controller without a gain table refuses it."""
+    (tmp_path / "mine.py").write_text(MINE)
+    rates = f"{tmp_path / 'mine.py'}:Rates"
+    # the inner loops fly the vehicle's own gains, in the library too (on main they flew
+    # MissionSettings' default Gains(), the Tello's, whatever the vehicle)
+    settings = MissionSettings(vehicle=RBE595, controller=rates)
+    assert as_plain(settings.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    def same(one, other) -> bool:  # compiled gains: tuples of arrays and numbers
+        return all(np.array_equal(a, b) for a, b in zip(one.gains, other.gains, strict=True))
+
+    flown = make_controller(rates, RBE595)
+    assert same(flown, make_controller("cascade", RBE595))
+    assert not same(flown, make_controller("cascade", TELLO))
+    slow = tmp_path / "slow.toml"
+    slow.write_text("[rate]\nkp = [15.0, 15.0, 15.0]\n")
+    assert controller_gains(rates, RBE595, slow).rate.kp.tolist() == [15.0, 15.0, 15.0]
+    with pytest.raises(QuadnavError, match="unknown key 'kx'; expected one of position"):
+        controller_gains(rates, TELLO, {"kx": [1.0, 1.0, 1.0]})
+    # a compiled controller of one's own has none to set
+    geometric = f"{tmp_path / 'mine.py'}:geometric"
+    assert controller_gains(geometric, TELLO) is None
+    assert_user_error(run_here("track", "hover", "--controller", geometric, "--gains", slow,
+                               "-o", tmp_path / "x"),
+                      f"controller {geometric}: it has no gain table to set (gains {slow} given)")
+    assert not (tmp_path / "x").exists()

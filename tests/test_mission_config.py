@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.batch.fly_one import fly_mission_spec, fly_row, load_context
 from quadnav.batch.grid import parse_spec
+from quadnav.cli.main import build_parser
+from quadnav.cli.mission_args import mission_config
 from quadnav.config import as_plain
 from quadnav.control.gains import load_gains
 from quadnav.errors import QuadnavError
@@ -23,9 +26,16 @@ from quadnav.vehicle.params import load_params
 from quadnav.world import World, load_world
 
 SMALL = "window:size=4x6x3,walls=1"
+#: The checkout's examples/, whose plain-Python plug-ins the tests fly.
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: Wall-time columns of metrics.json, which differ between two flights of one mission.
 WALL_TIMES = {"planning_time_s", "trajectory_time_s", "sim_load_time_s", "sim_wall_time_s",
               "real_time_factor"}
+
+
+def fly_args(*flags: str):
+    """``quadnav fly`` 's parsed flags."""
+    return build_parser(["fly", *flags]).parse_args(["fly", *flags])
 
 
 def _metrics(folder) -> dict:
@@ -170,6 +180,91 @@ def test_a_run_folder_flies_again_exactly_from_its_mission_file(tmp_path):
             == (tmp_path / "first" / MISSION_FILE).read_text())
     assert_user_error(run_here("refly", tmp_path, "-o", tmp_path / "x"),
                       f"{tmp_path}: no mission.toml: expected a run folder of quadnav fly")
+
+
+#: A vehicle of the user's own as a rotorpy parameter dict, plain Python (no rotorpy).
+MY_PARAMS = """\
+import numpy as np
+
+d = 0.1 / np.sqrt(2)
+quad_params = {
+    "mass": 0.25, "Ixx": 4e-4, "Iyy": 5e-4, "Izz": 8e-4, "num_rotors": 4,
+    "rotor_pos": {"r1": d * np.array([1, -1, 0]), "r2": d * np.array([-1, 1, 0]),
+                  "r3": d * np.array([1, 1, 0]), "r4": d * np.array([-1, -1, 0])},
+    "rotor_directions": np.array([-1, -1, 1, 1]), "k_eta": 2e-7, "k_m": 4e-9, "tau_m": 0.03,
+    "rotor_speed_max": 2500, "k_d": 2e-6, "k_z": 1e-6, "c_Dx": 0.01, "c_Dy": 0.01,
+}
+"""
+
+
+def test_a_run_of_plain_python_plug_ins_flies_again_exactly(tmp_path):
+    """A controller, a wind, a reference and a planner of your own and a rotorpy dict as the
+    vehicle, given as flags from the folder that holds them: the run folder's mission.toml
+    names the plug-ins by their absolute paths and the vehicle by its values, and flies the
+    same flight again from anywhere, without the vehicle's file."""
+    (tmp_path / "here").mkdir()
+    (tmp_path / "here" / "my_params.py").write_text(MY_PARAMS)
+    for name in ("plain_controller.py", "plain_wind.py", "plain_trajectory.py",
+                 "plain_planner.py"):
+        (tmp_path / "here" / name).write_text((EXAMPLES / name).read_text())
+    first = run_here("fly", SMALL, "--improve", "500", "--params", "my_params.py:quad_params",
+                     "--controller", "plain_controller.py:PDAttitude(kp=6.0)",
+                     "--gains", "p2a-starter", "--wind", "plain_wind.py:GustFront(speed=2.0)",
+                     "--reference", "plain_trajectory.py:StopAndGo(speed=1.0)",
+                     "--duration", "12", "--planner", "plain_planner.py:graph_search",
+                     "--control-rate", "250", "--no-figures", "-o", "first",
+                     cwd=tmp_path / "here")
+    assert first.returncode == 0, first.stderr
+
+    kept = read_mission(tmp_path / "here" / "first" / MISSION_FILE)
+    here = tmp_path / "here"
+    assert kept.controller.name == f"{here / 'plain_controller.py'}:PDAttitude(kp=6.0)"
+    assert kept.disturbances.wind_model == f"{here / 'plain_wind.py'}:GustFront(speed=2.0)"
+    assert kept.trajectory.reference == f"{here / 'plain_trajectory.py'}:StopAndGo(speed=1.0)"
+    assert (kept.trajectory.duration, kept.planner.name) == (
+        12.0, f"{here / 'plain_planner.py'}:graph_search")
+    assert kept.vehicle["mass"] == 0.25 and kept.vehicle["rotor_drag"] == [2e-6, 2e-6, 1e-6]
+    # the inner loops' gains, the course table's, kept by their values
+    assert kept.controller.gains["position"] == as_plain(load_gains("p2a-starter").position)
+    (tmp_path / "here" / "my_params.py").unlink()  # the vehicle is kept by its values
+
+    again = run_here("refly", tmp_path / "here" / "first", "--no-figures", "-o", "again",
+                     cwd=tmp_path)
+    mission = run_here("fly", "--mission", tmp_path / "here" / "first" / MISSION_FILE,
+                       "--no-figures", "-o", "flags", "--wind", "plain_wind.py:GustFront("
+                       "speed=2.0)", cwd=tmp_path / "here")
+
+    assert again.returncode == 0 and mission.returncode == 0, again.stderr + mission.stderr
+    flown = _metrics(tmp_path / "here" / "first")
+    for folder in (tmp_path / "again", tmp_path / "here" / "flags"):
+        metrics = _metrics(folder)
+        assert metrics.pop("planner") == kept.planner.name  # as kept: by its absolute path
+        assert metrics == {key: value for key, value in flown.items() if key != "planner"}
+    assert ((tmp_path / "again" / MISSION_FILE).read_text()
+            == (tmp_path / "here" / "first" / MISSION_FILE).read_text())
+
+
+def test_the_wind_flag_sets_the_whole_wind_over_a_mission_file(tmp_path):
+    path = tmp_path / "m.toml"
+    gust = f"{EXAMPLES / 'plain_wind.py'}:GustFront"
+    path.write_text(f"[disturbances]\nwind = [0.01, 0, 0]\nwind_model = '{gust}(speed=2)'\n")
+    base = read_mission(path)
+    assert base.disturbances.wind == (0.01, 0.0, 0.0)  # both, beside each other, in a file
+    model = mission_config(fly_args("--mission", str(path), "--wind", gust)).disturbances
+    assert (model.wind, model.wind_model) == ((0.0, 0.0, 0.0), gust)
+    force = mission_config(fly_args("--mission", str(path), "--wind", "0", "0.02", "0"))
+    assert (force.disturbances.wind, force.disturbances.wind_model) == ((0.0, 0.02, 0.0), None)
+    with pytest.raises(QuadnavError, match=r"^--wind: expected three forces"):
+        mission_config(fly_args("--wind", "0", "0.02"))
+
+
+def test_a_duration_needs_a_reference(tmp_path):
+    with pytest.raises(QuadnavError, match=r"^the mission: trajectory.duration: applies only "
+                                           "to a trajectory class of your own"):
+        MissionConfig.from_table({"trajectory": {"duration": 5.0}})
+    (tmp_path / "m.toml").write_text("[trajectory]\nspeed = 1.0\nduration = 5.0\n")
+    assert_user_error(run_here("fly", "--mission", "m.toml", "-o", "out", cwd=tmp_path),
+                      "m.toml:3: trajectory.duration: applies only to a trajectory class")
 
 
 def test_a_batch_row_flies_again_from_its_refly_mission_file(tmp_path):
