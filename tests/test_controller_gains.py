@@ -139,6 +139,8 @@ def test_one_gains_rule_for_every_controller(tmp_path):
     assert controller_gains(rates, RBE595, slow).rate.kp.tolist() == [15.0, 15.0, 15.0]
     with pytest.raises(QuadnavError, match="unknown key 'kx'; expected one of position"):
         controller_gains(rates, TELLO, {"kx": [1.0, 1.0, 1.0]})
+    with pytest.raises(QuadnavError, match="expected gains of type Gains, got SE3Gains"):
+        MissionSettings(controller=rates, gains=SE3Gains())  # refused before it flies
     # a compiled controller of one's own has none to set
     geometric = f"{tmp_path / 'mine.py'}:geometric"
     assert controller_gains(geometric, TELLO) is None

@@ -27,6 +27,7 @@ from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
 from quadnav.control.registry import (
     DEFAULT_CONTROLLER,
+    INNER_LOOPS,
     controller_class,
     controller_gains,
     make_controller,
@@ -147,6 +148,8 @@ class MissionSettings:
         if controller_class(self.controller) is None:  # a compiled one: is its rate stable?
             check_control_rate(self.flying_controller(), self.flown_vehicle,
                                self.sim.control_rate)
+        else:  # its inner loops' gains
+            INNER_LOOPS.checked(self.vehicle, self.gains)
 
     @property
     def flown_gains(self) -> Any:
