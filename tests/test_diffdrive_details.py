@@ -313,8 +313,8 @@ def test_map2d_file(tmp_path):
     ("boundary 0 0 5 5\n\nrect 1 1 2 2 3\n", "m.map2d:3: rect: expected 4 numbers"),
     ("boundary 0 0 5 5\nrect 1 one 2 2\n", "m.map2d:2: rect: expected a number, got 'one'"),
     ("boundary 0 0 5 inf\n", "m.map2d:1: boundary: expected a finite number"),
-    ("boundary 0 0 5 5\nrect 1 2 3 2\n", "m.map2d:2: rect: expected ymin < ymax, got 2 >= 2"),
-    ("boundary 5 0 1 5\n", "m.map2d:1: boundary: expected xmin < xmax"),
+    ("boundary 0 0 5 0\n", "m.map2d:1: boundary: zero thickness along y (ymin = ymax = 0): "
+     "expected a box with a volume"),
     ("boundary 0 0 5 5\nboundary 0 0 6 6\n", "m.map2d:2: a second boundary line (the first is line 1)"),
     ("rect 1 1 2 2\n", "m.map2d: no 'boundary"),
 ])

@@ -41,6 +41,7 @@ from quadnav.world.reading import (
     check_coordinates,
     decode_text,
     keyword_lines,
+    order_extents,
     parse_float,
     read_file,
 )
@@ -49,7 +50,6 @@ from quadnav.world.reading import (
 SLAB = 1.0
 #: File extension of 2D map files.
 MAP2D_SUFFIX = ".map2d"
-_AXES = "xy"
 
 
 def _frozen(values: ArrayLike, shape: tuple[int, int] | tuple[int], what: str) -> FloatArray:
@@ -201,12 +201,11 @@ def parse_map2d(text: str, source: str) -> World2D:
         if len(values) != 4:
             raise MapError(source, f"{keyword}: expected 4 numbers (xmin ymin xmax ymax), "
                            f"got {len(values)} fields", number)
-        box = [parse_float(v, source, number, keyword) for v in values]
-        for axis in range(2):
-            if box[axis] >= box[axis + 2]:
-                raise MapError(source, f"{keyword}: expected {_AXES[axis]}min < "
-                               f"{_AXES[axis]}max, got {box[axis]:g} >= {box[axis + 2]:g}",
-                               number)
+        ordered = order_extents([parse_float(v, source, number, keyword) for v in values],
+                                source, number, keyword, boundary=keyword == "boundary")
+        if ordered is None:
+            continue
+        box = ordered[0] + ordered[1]
         if keyword == "rect":
             rects.append(box)
         elif boundary is not None:

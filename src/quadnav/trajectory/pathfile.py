@@ -10,7 +10,13 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
 from quadnav.limits import COORDINATE, MAX_WAYPOINTS
-from quadnav.world.reading import check_line_length, decode_text, read_file
+from quadnav.world.reading import (
+    check_line_length,
+    decode_text,
+    is_number_text,
+    read_file,
+    text_lines,
+)
 
 #: The header ``quadnav plan`` writes and this reader expects.
 HEADER = ["x", "y", "z"]
@@ -25,7 +31,7 @@ def read_path_csv(path: str | Path) -> FloatArray:
     :data:`~quadnav.limits.MAX_WAYPOINTS`.
     """
     source = str(path)
-    lines = decode_text(read_file(path), source).splitlines()
+    lines = text_lines(decode_text(read_file(path), source))
     for number, line in enumerate(lines, start=1):
         check_line_length(line, source, number)
     rows = [(n, row) for n, row in enumerate(csv.reader(lines), start=1)
@@ -34,10 +40,8 @@ def read_path_csv(path: str | Path) -> FloatArray:
         raise MapError(source, "expected the header line 'x,y,z'", rows[0][0] if rows else 1)
     points = []
     for line, row in rows[1:]:
-        try:
-            values = [float(cell) for cell in row]
-        except ValueError:
-            values = []
+        cells = [cell.strip() for cell in row]
+        values = [float(cell) for cell in cells] if all(map(is_number_text, cells)) else []
         if len(values) != 3 or not all(v in COORDINATE for v in values):
             raise MapError(source, f"expected three numbers x,y,z {COORDINATE.describe()}, "
                            f"got {','.join(row)[:60]!r}", line)

@@ -36,7 +36,7 @@ from quadnav.trajectory.export import CSV_HEADER, MP_ROWS
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.quintic import hermite_trajectory
 from quadnav.trajectory.reference import Samples, Sampling
-from quadnav.world.reading import decode_text, read_file
+from quadnav.world.reading import decode_text, is_number_text, read_file, shown_text, text_lines
 
 #: Columns per second of an MP.csv that the course's code plays (one every 0.05 s), Hz.
 COURSE_MP_RATE = 20.0
@@ -108,7 +108,7 @@ def read_reference_file(path: str | Path, rate: float = COURSE_MP_RATE) -> Sampl
             names the file, the line and column, and what was expected.
     """
     source = str(path)
-    lines = decode_text(read_file(path), source).splitlines()
+    lines = text_lines(decode_text(read_file(path), source))
     first = next((line.strip() for line in lines if line.strip()), "")
     if first[:1].isalpha():
         return _read_table(lines, source)
@@ -123,27 +123,18 @@ def _rows(lines: list[str], source: str, skip: int = 0) -> list[tuple[int, Float
     for number, line in enumerate(lines[skip:], start=skip + 1):
         if not line.strip():
             continue
-        cells = line.split(",")
-        try:
-            values = np.array(cells, dtype=np.float64)
-        except ValueError:
-            column = next(k for k, cell in enumerate(cells, 1) if not _is_number(cell))
+        cells = [cell.strip() for cell in line.split(",")]
+        column = next((k for k, cell in enumerate(cells, 1) if not is_number_text(cell)), 0)
+        if column:
             raise MapError(source, f"column {column}: expected a number, got "
-                           f"{cells[column - 1].strip()[:40]!r}", number) from None
+                           f"{shown_text(cells[column - 1])!r}", number)
+        values = np.array(cells, dtype=np.float64)
         bad = np.flatnonzero(~np.isfinite(values))
         if len(bad):
             raise MapError(source, f"column {bad[0] + 1}: expected a finite number, got "
-                           f"{cells[bad[0]].strip()[:40]!r}", number)
+                           f"{shown_text(cells[bad[0]])!r}", number)
         rows.append((number, values))
     return rows
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
 
 
 def _check_count(count: int, source: str, what: str) -> None:

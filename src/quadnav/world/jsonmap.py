@@ -15,7 +15,6 @@ JSON object begins.
 
 from __future__ import annotations
 
-import bisect
 import json
 import json.decoder
 import json.scanner
@@ -41,22 +40,69 @@ class _LocatedDict(dict):
     line: int
 
 
+class _Literal(float):
+    """A JSON number that remembers how the file wrote it (to name a number too large for a
+    float by its digits, not as ``inf``)."""
+
+    text: str
+
+
+class _RefusedError(ValueError):
+    """What the decoder refuses that JSON itself allows: a message, and its line or the
+    text whose first place in the file is its line."""
+
+    def __init__(self, message: str, line: int | None = None, token: str = "") -> None:
+        super().__init__(message)
+        self.line = line
+        self.token = token
+
+
+def _read_number(text: str) -> float:
+    """A JSON number's value; :class:`_RefusedError` for one written with digits other than
+    ASCII's (Python's JSON scanner matches any Unicode digit)."""
+    if not text.isascii():
+        raise _RefusedError(f"expected a number in ASCII digits, got {text!r}", token=text)
+    value = _Literal(text)
+    value.text = text
+    return value
+
+
 def _decode_with_lines(text: str) -> Any:
-    """json.loads, but every object is a _LocatedDict carrying its 1-based line."""
+    """json.loads, but every object is a _LocatedDict carrying its 1-based line, a key
+    given twice in one object is refused (JSON leaves it open; Python keeps the last), and
+    so is a number in other than ASCII digits."""
     # Integers become floats as they are read: every number in a map is used as one, and
     # int() refuses more than 4,300 digits.
-    decoder = json.JSONDecoder(parse_int=float)
-    newlines = [i for i, char in enumerate(text) if char == "\n"]
+    decoder = json.JSONDecoder(parse_int=_read_number, parse_float=_read_number)
+    # Objects begin in the order they are read: count the newlines since the last one
+    # (linear in the text, and nothing stored per line).
+    cursor = {"offset": 0, "line": 1}
 
-    def parse_object(s_and_end: tuple[str, int], *args: Any) -> tuple[dict, int]:
-        obj, end = json.decoder.JSONObject(s_and_end, *args)
-        located = _LocatedDict(obj)
-        located.line = bisect.bisect_left(newlines, s_and_end[1]) + 1
+    def parse_object(s_and_end: tuple[str, int], strict: bool, scan_once: Any,
+                     object_hook: Any, object_pairs_hook: Any, memo: Any = None
+                     ) -> tuple[dict, int]:
+        start = s_and_end[1]
+        cursor["line"] += text.count("\n", cursor["offset"], start)
+        cursor["offset"] = start
+        line = cursor["line"]
+        pairs, end = json.decoder.JSONObject(s_and_end, strict, scan_once, None, list, memo)
+        located = _LocatedDict(pairs)
+        if len(located) < len(pairs):
+            seen: set[str] = set()
+            twice = next(key for key, _ in pairs if key in seen or seen.add(key))
+            raise _RefusedError(f"key {json.dumps(twice)[:60]} given twice in one object: "
+                           "expected each key once", line=line)
+        located.line = line
         return located, end
 
     decoder.parse_object = parse_object  # type: ignore[assignment]
     decoder.scan_once = json.scanner.py_make_scanner(decoder)
-    return decoder.decode(text)
+    try:
+        return decoder.decode(text)
+    except _RefusedError as refused:
+        if refused.line is None:
+            refused.line = text.count("\n", 0, max(text.find(refused.token), 0)) + 1
+        raise
 
 
 def _line(obj: Any) -> int | None:
@@ -71,7 +117,7 @@ def _number(value: Any, source: str, line: int | None, what: str) -> float:
     """``value`` as a finite float, or a MapError."""
     if not _is_number(value):
         raise MapError(source, f"{what}: expected a number, got {json.dumps(value)[:60]}", line)
-    return check_finite(float(value), source, line, what)
+    return check_finite(float(value), source, line, what, getattr(value, "text", None))
 
 
 def _numbers(value: Any, count: int, source: str, line: int | None, what: str) -> list[float]:
@@ -101,6 +147,8 @@ def parse_json_map(text: str, source: str) -> World:
     except json.JSONDecodeError as error:
         raise MapError(source, f"broken JSON: {error.msg} (column {error.colno})",
                        error.lineno) from None
+    except _RefusedError as refused:
+        raise MapError(source, str(refused), refused.line) from None
     except RecursionError:
         raise MapError(source, "broken JSON: nested too deeply") from None
     if not isinstance(data, dict):

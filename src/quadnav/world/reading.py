@@ -8,6 +8,7 @@ reported as :class:`~quadnav.errors.MapWarning`.
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -26,6 +27,18 @@ from quadnav.limits import (
 from quadnav.world.model import World
 
 AXES = "xyz"
+
+#: A line end of a text file: ``\n``, ``\r\n`` or ``\r``, and nothing else (``str.splitlines``
+#: also ends lines at a form feed, a vertical tab, U+0085, U+2028, ..., which would end a ``#``
+#: comment inside a line and read the rest of it).
+_LINE_END = re.compile(r"\r\n|\r|\n")
+#: A number as a map file may write it: ASCII digits with an optional sign, point and exponent,
+#: or ``inf``/``nan`` (refused as not finite). Python's ``float`` also takes ``1_000`` and
+#: non-ASCII digits; a map does not.
+_NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)",
+                     re.ASCII | re.IGNORECASE)
+#: Characters of a number's text shown in a message before it is cut.
+_SHOWN = 24
 
 
 def read_file(path: str | Path) -> bytes:
@@ -59,11 +72,16 @@ def decode_text(data: bytes, source: str) -> str:
     return text
 
 
+def text_lines(text: str) -> list[str]:
+    """The lines of a text file, split at its line ends (``\n``, ``\r\n``, ``\r``) only."""
+    return _LINE_END.split(text)
+
+
 def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
                   ) -> Iterator[tuple[int, str, list[str]]]:
     """``(line number, keyword, value fields)`` for each line of a keyword map text that
     holds anything once ``#`` comments are removed; MapError for an unknown keyword."""
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in enumerate(text_lines(text), start=1):
         check_line_length(raw, source, number)
         fields = raw.split("#", 1)[0].split()
         if not fields:
@@ -81,18 +99,36 @@ def check_line_length(line: str, source: str, number: int) -> None:
                        f"{MAX_LINE:,}", number)
 
 
+def is_number_text(token: str) -> bool:
+    """Whether ``token`` is a number as a map writes it (ASCII digits, sign, point,
+    exponent; or ``inf``/``nan``), not merely something ``float`` accepts."""
+    return _NUMBER.fullmatch(token) is not None
+
+
 def parse_float(token: str, source: str, line: int, what: str) -> float:
     """A finite float from a token such as ``3``, ``-0.5`` or ``2.000000``."""
-    try:
-        value = float(token)
-    except ValueError:
-        raise MapError(source, f"{what}: expected a number, got {token!r}", line) from None
-    return check_finite(value, source, line, what)
+    if not is_number_text(token):
+        raise MapError(source, f"{what}: expected a number, got {shown_text(token)!r}", line)
+    return check_finite(float(token), source, line, what, token)
 
 
-def check_finite(value: float, source: str, line: int | None, what: str) -> float:
-    """``value`` itself if it is finite; otherwise a MapError."""
+def shown_text(text: str) -> str:
+    """``text`` as a message shows it: whole, or its start and end around an ellipsis with
+    its length when it is longer than a message line should be."""
+    if len(text) <= _SHOWN:
+        return text
+    return f"{text[:_SHOWN // 2]}...{text[-4:]} ({len(text):,} characters)"
+
+
+def check_finite(value: float, source: str, line: int | None, what: str,
+                 text: str | None = None) -> float:
+    """``value`` itself if it is finite; otherwise a MapError. ``text``: the number as the
+    file writes it, named in the message when it is too large for a 64-bit float (such as
+    a 5,000-digit integer) rather than calling it ``inf``."""
     if not math.isfinite(value):
+        if text is not None and text.lstrip("+-").lower() not in ("inf", "infinity", "nan"):
+            raise MapError(source, f"{what}: expected a finite number, got {shown_text(text)}"
+                           ", beyond the largest a 64-bit float holds (1.8e308)", line)
         raise MapError(source, f"{what}: expected a finite number, got {value!r}", line)
     return value
 
@@ -112,23 +148,10 @@ def read_box(box: Sequence[float], source: str, line: int | None, what: str,
     one with a coordinate outside :data:`~quadnav.limits.COORDINATE` is a MapError.
     Block coordinates may be any finite numbers: blocks are clipped to the boundary.
     """
-    lower = [min(box[a], box[a + 3]) for a in range(3)]
-    upper = [max(box[a], box[a + 3]) for a in range(3)]
-    swapped = [a for a in range(3) if box[a] > box[a + 3]]
-    if swapped:
-        details = ", ".join(f"{AXES[a]}min {box[a]:g} > {AXES[a]}max {box[a + 3]:g}"
-                            for a in swapped)
-        warnings.warn(f"{_where(source, line)}: {what}: min and max swapped ({details}); "
-                      "read as the box between them", MapWarning, stacklevel=2)
-    flat = [a for a in range(3) if lower[a] == upper[a]]
-    if flat:
-        axis = AXES[flat[0]]
-        thickness = f"zero thickness along {axis} ({axis}min = {axis}max = {lower[flat[0]]:g})"
-        if boundary:
-            raise MapError(source, f"{what}: {thickness}: expected a box with a volume", line)
-        warnings.warn(f"{_where(source, line)}: {what}: {thickness}; dropped", MapWarning,
-                      stacklevel=2)
+    ordered = order_extents(box, source, line, what, boundary)
+    if ordered is None:
         return None
+    lower, upper = ordered
     if boundary:
         check_coordinates(lower + upper, source, line, what)
         for a in range(3):
@@ -137,6 +160,37 @@ def read_box(box: Sequence[float], source: str, line: int | None, what: str,
                                f"along {AXES[a]}: expected sides {BOUNDARY_SIDE.describe()}",
                                line)
     return lower + upper
+
+
+def order_extents(box: Sequence[float], source: str, line: int | None, what: str,
+                  boundary: bool = False) -> tuple[list[float], list[float]] | None:
+    """The lower and upper corners of a box given as its mins then its maxes (2 or 3 axes:
+    ``[xmin, ymin, (zmin,) xmax, ymax, (zmax)]``): the one rule of every map format.
+
+    A min above its max on an axis (found in real course files) is read as the box between
+    the two values, with a :class:`MapWarning` naming the source and line. A block of zero
+    thickness on an axis is dropped with a warning (``None``); a boundary of zero thickness
+    is a MapError.
+    """
+    axes = len(box) // 2
+    lower = [min(box[a], box[a + axes]) for a in range(axes)]
+    upper = [max(box[a], box[a + axes]) for a in range(axes)]
+    swapped = [a for a in range(axes) if box[a] > box[a + axes]]
+    if swapped:
+        details = ", ".join(f"{AXES[a]}min {box[a]:g} > {AXES[a]}max {box[a + axes]:g}"
+                            for a in swapped)
+        warnings.warn(f"{_where(source, line)}: {what}: min and max swapped ({details}); "
+                      "read as the box between them", MapWarning, stacklevel=3)
+    flat = [a for a in range(axes) if lower[a] == upper[a]]
+    if flat:
+        axis = AXES[flat[0]]
+        thickness = f"zero thickness along {axis} ({axis}min = {axis}max = {lower[flat[0]]:g})"
+        if boundary:
+            raise MapError(source, f"{what}: {thickness}: expected a box with a volume", line)
+        warnings.warn(f"{_where(source, line)}: {what}: {thickness}; dropped", MapWarning,
+                      stacklevel=3)
+        return None
+    return lower, upper
 
 
 def check_coordinates(values: Sequence[float], source: str, line: int | None,

@@ -21,6 +21,7 @@ from quadnav.world.reading import (
     decode_text,
     parse_float,
     read_file,
+    text_lines,
 )
 
 _LINE = re.compile(r"^\s*(start|goal)\s*:\s*\(?([^()]*)\)?\s*$", re.IGNORECASE)
@@ -29,7 +30,7 @@ _LINE = re.compile(r"^\s*(start|goal)\s*:\s*\(?([^()]*)\)?\s*$", re.IGNORECASE)
 def parse_start_goal(text: str, source: str) -> tuple[np.ndarray, np.ndarray]:
     """(start, goal), each (3,) metres, from the text of a start/goal file."""
     found: dict[str, np.ndarray] = {}
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in enumerate(text_lines(text), start=1):
         check_line_length(raw, source, number)
         content = raw.split("#", 1)[0]
         if not content.strip():
