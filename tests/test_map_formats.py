@@ -58,7 +58,7 @@ def test_text_quirks_all_at_once():
     ("boundary 0 0 0 1 1 0\n", "m.txt:1: boundary: zero thickness along z (zmin = zmax = 0): "
                                "expected a box with a volume"),
     ("boundary 0 0 0 1e5 1 1\n", "m.txt:1: boundary: expected coordinates from -10,000 to "
-                                 "10,000 m, got 100000"),
+                                 "10,000 m, got 100,000"),
     ("boundary 0 0 0 1e-4 1 1\n", "m.txt:1: boundary: the boundary is 0.0001 m along x: "
                                   "expected sides from 0.001 to 20,000 m"),
     ("boundary 0 0 0 1 1 1\nblock " + "1 " * 5000 + "\n", "m.txt:2: line of 10,0"),
@@ -179,7 +179,7 @@ def test_json_fields_and_interleaved_extents():
      '{"extents": [0, 1, 0, 1, 0, 1], "color": [255, 0, 0]}]}', "m.json:3: blocks[0].color: expected colour values in 0..1"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "start": [1, 2]}', "m.json:1: start: expected a list of 3"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "margin": -1}', "m.json:1: margin: expected from 0 to 100 m, got -1"),
-    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"goal": [1, 2, 3e4]}', "m.json:1: goal: expected coordinates from -10,000 to 10,000 m, got 30000"),
+    ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]},\n"goal": [1, 2, 3e4]}', "m.json:1: goal: expected coordinates from -10,000 to 10,000 m, got 30,000"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 9]}, "margin": "big"}', "m.json:1: margin: expected a number, got \"big\""),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 1' + "0" * 400 + ']}}', "m.json:1: bounds.extents: expected a finite number"),
     ('{"bounds": {"extents": [0, 9, 0, 9, 0, 1' + "0" * 5000 + ']}}', "m.json:1: bounds.extents: expected a finite number"),

@@ -20,11 +20,13 @@ from quadnav.errors import QuadnavError
 
 
 def format_number(value: float) -> str:
-    """``value`` for a message: whole numbers with thousands separators, else ``%g``."""
+    """``value`` for a message: whole numbers with thousands separators, else the shortest
+    text that reads back as exactly ``value`` (``10000.001``, never a rounded ``10000`` that
+    would contradict the range it is refused by)."""
     if isinstance(value, int) or (math.isfinite(value) and float(value).is_integer()
                                   and abs(value) < 1e15):
         return f"{int(value):,}"
-    return f"{value:g}"
+    return repr(float(value))
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from quadnav.cli.args import number_in
+from quadnav.cli.args import number_in, output_path
 from quadnav.cli.commands import command_help
 from quadnav.cli.progress import fraction_bar
 from quadnav.limits import Range
@@ -53,7 +53,7 @@ def add_animate_command(subparsers: argparse._SubParsersAction) -> None:
                     "than --max-frames frames plays faster than --speed (the command says "
                     "how fast). Exit 2 on bad input.")
     p.add_argument("folder", metavar="DIR", help="a quadnav fly or track output folder")
-    p.add_argument("-o", "--output", metavar="FILE",
+    p.add_argument("-o", "--output", type=output_path, metavar="FILE",
                    help="the animation to write, ending in .gif or .mp4 (default: "
                         f"DIR/{DEFAULT_NAME})")
     p.add_argument("--fps", type=number_in(FPS), default=DEFAULT_FPS, metavar="N",

@@ -72,6 +72,14 @@ heading_degrees = number_in(HEADING_DEGREES)
 time_scale = number_in(TIME_SCALE)
 
 
+def output_path(text: str) -> str:
+    """An ``-o`` path: any non-blank text (an empty one would write into the current
+    folder, or nowhere)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected a file or folder name, got {text!r}")
+    return text
+
+
 def speed_or_max(text: str) -> Speed:
     """argparse type of ``--speed V|max``: a top speed in :data:`SPEED`, or ``"max"`` (as
     fast as the vehicle can follow; :func:`~quadnav.limits.speed_value`)."""
@@ -190,7 +198,7 @@ def add_run_output_arguments(parser: argparse.ArgumentParser, folder: str, repor
                         help="also write DIR/view.html, an interactive 3D page of the run "
                              "that works offline (the same as quadnav view DIR)")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
-    parser.add_argument("-o", "--output", default=folder, metavar="DIR",
+    parser.add_argument("-o", "--output", default=folder, metavar="DIR", type=output_path,
                         help=f"folder to write into, created if needed (default: {folder})")
 
 

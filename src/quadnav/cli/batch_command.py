@@ -19,6 +19,7 @@ from quadnav.cli.args import (
     add_margin_argument,
     add_start_goal_arguments,
     number_in,
+    output_path,
     speed_or_max,
     workers_description,
 )
@@ -166,7 +167,7 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("-o", "--output", default="batch", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="batch", metavar="DIR",
                    help="folder to write into, created if needed (default: batch)")
     p.set_defaults(handler=batch)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.args import output_path
 from quadnav.cli.commands import command_help
 from quadnav.runs import read_run
 from quadnav.viz.blender_scene import (
@@ -73,7 +74,7 @@ def add_blender_command(subparsers: argparse._SubParsersAction) -> None:
                     "Blender's Workbench engine, headless. Needs Blender's Python module: "
                     f"{INSTALL_HINT}.")
     p.add_argument("folder", metavar="DIR", help="folder written by quadnav fly or track -o DIR")
-    p.add_argument("-o", "--output", metavar="FILE.blend",
+    p.add_argument("-o", "--output", type=output_path, metavar="FILE.blend",
                    help="the .blend file to write (default: DIR/scene.blend)")
     p.add_argument("--render", action="append", default=[], metavar="NAME.png",
                    help="also render a still from the camera named by the file's stem: "

@@ -49,6 +49,7 @@ from quadnav.cli.args import (
     length,
     margin_value,
     number_in,
+    output_path,
     plan_time,
     resolve_margin,
     seed_value,
@@ -410,7 +411,7 @@ def _add_search_arguments(parser: argparse.ArgumentParser) -> None:
                                           f"{LENGTH.describe()} "
                                           f"(default: {defaults.goal_radius:g})")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
-    parser.add_argument("-o", "--output", default="kino", metavar="DIR",
+    parser.add_argument("-o", "--output", type=output_path, default="kino", metavar="DIR",
                         help="folder to write into, created if needed (default: kino)")
 
 

@@ -8,6 +8,7 @@ from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
     add_start_goal_arguments,
+    output_path,
     plan_time,
     resolve_margin,
     resolve_start_goal,
@@ -147,7 +148,7 @@ def add_map_commands(subparsers: argparse._SubParsersAction) -> None:
                                         "boundary transparent, start red, goal green.")
     add_map_argument(p, optional=True)
     add_start_goal_arguments(p)
-    p.add_argument("-o", "--output", default="map.png", metavar="FILE",
+    p.add_argument("-o", "--output", type=output_path, default="map.png", metavar="FILE",
                    help="image to write (.png, .pdf, .svg; default: map.png)")
     p.set_defaults(handler=show)
 

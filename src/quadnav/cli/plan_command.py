@@ -13,6 +13,7 @@ from quadnav.cli.args import (
     add_planner_arguments,
     add_start_goal_arguments,
     length,
+    output_path,
     planner_budget,
     probability,
     resolve_margin,
@@ -120,6 +121,6 @@ def add_plan_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figures", action="store_true",
                    help="skip plan.png (matplotlib is not even loaded: the fastest plan)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("-o", "--output", default="plan", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="plan", metavar="DIR",
                    help="folder to write into, created if needed (default: plan)")
     p.set_defaults(handler=plan)

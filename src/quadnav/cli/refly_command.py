@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.args import output_path
 from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import add_strict_argument
 from quadnav.cli.fly_command import write_mission
@@ -78,6 +79,6 @@ def add_refly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figures", action="store_true", help=f"skip the figures and {REPORT}")
     p.add_argument("--html", action="store_true", help="also write DIR/view.html")
     add_strict_argument(p)
-    p.add_argument("-o", "--output", default="refly", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="refly", metavar="DIR",
                    help="folder to write into, created if needed (default: refly)")
     p.set_defaults(handler=refly)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from quadnav.cli.args import output_path
 from quadnav.cli.commands import command_help
 from quadnav.runs import REPORT, read_run
 
@@ -33,7 +34,7 @@ def add_report_command(subparsers: argparse._SubParsersAction) -> None:
                     "or drawn from its data when it has none (quadnav fly --no-figures). "
                     f"quadnav fly and track write DIR/{REPORT} themselves. Exit 2 on bad input.")
     p.add_argument("folders", nargs="+", metavar="DIR", help="quadnav fly or track output folders")
-    p.add_argument("-o", "--output", metavar="FILE",
+    p.add_argument("-o", "--output", type=output_path, metavar="FILE",
                    help=f"the report to write, ending in .html (default: DIR/{REPORT} for one "
                         f"folder, {REPORT} in the current folder for several)")
     p.set_defaults(handler=report)

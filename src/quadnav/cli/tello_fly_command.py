@@ -24,6 +24,7 @@ from quadnav.cli.args import (
     add_start_goal_arguments,
     heading_degrees,
     number_in,
+    output_path,
     time_scale,
 )
 from quadnav.cli.mission_args import mission_config
@@ -246,6 +247,6 @@ def add_tello_fly_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--no-figures", action="store_true",
                    help="write the run folder's data files but not its figures and report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("-o", "--output", default="tello_flight", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="tello_flight", metavar="DIR",
                    help="folder to write into, created if needed (default: tello_flight)")
     p.set_defaults(handler=tello_fly)

@@ -10,6 +10,7 @@ from quadnav.cli.args import (
     add_map_argument,
     add_margin_argument,
     number_in,
+    output_path,
     resolve_margin,
     speed,
 )
@@ -125,6 +126,6 @@ def add_traj_command(subparsers: argparse._SubParsersAction) -> None:
                    help="sample interval of MP.csv, which has no times: the course's code "
                         f"plays one column every {1 / COURSE_MP_RATE:g} s, and quadnav track "
                         f"reads one at that rate by default (default: {1 / COURSE_MP_RATE:g})")
-    p.add_argument("-o", "--output", default="traj", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="traj", metavar="DIR",
                    help="folder to write into, created if needed (default: traj)")
     p.set_defaults(handler=traj)

@@ -6,7 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from quadnav.cli.args import add_executor_arguments, number_in, seed_value, workers_description
+from quadnav.cli.args import (
+    add_executor_arguments,
+    number_in,
+    output_path,
+    seed_value,
+    workers_description,
+)
 from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
@@ -169,7 +175,7 @@ def add_tune_command(subparsers: argparse._SubParsersAction) -> None:
                    help=f"the study's name in the storage (default: {DEFAULT_STUDY})")
     add_executor_arguments(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("-o", "--output", default="tune", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="tune", metavar="DIR",
                    help="folder to write into, created if needed (default: tune)")
     p.set_defaults(handler=tune)
 

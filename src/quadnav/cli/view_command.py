@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from quadnav.cli.args import output_path
 from quadnav.cli.commands import command_help
 from quadnav.runs import VIEW_PAGE, read_run
 from quadnav.viz.html_viewer import write_viewer
@@ -32,6 +33,6 @@ def add_view_command(subparsers: argparse._SubParsersAction) -> None:
                     "rotate, wheel to zoom. The page needs no network and no files beside it; "
                     "open it in any browser.")
     p.add_argument("folder", metavar="DIR", help="a folder written by quadnav fly or quadnav track")
-    p.add_argument("-o", "--output", metavar="FILE",
+    p.add_argument("-o", "--output", type=output_path, metavar="FILE",
                    help=f"the page to write, ending in .html (default: DIR/{VIEW_PAGE})")
     p.set_defaults(handler=view)

@@ -190,11 +190,15 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
         table.pop("based_on", None)
         return from_table(VehicleParams(name=str(spec)), table, f"preset {spec}")
     path = Path(spec)
-    if not path.is_file():
-        if ":" in str(spec):
-            return _rotorpy_vehicle(str(spec))
-        raise QuadnavError(f"{spec}: expected {vehicle_forms()}")
-    return params_from_table(read_toml(path), str(path), path.stem)
+    if path.is_file():
+        return params_from_table(read_toml(path), str(path), path.stem)
+    if path.exists():
+        raise QuadnavError(f"{spec}: not a regular file: expected a vehicle TOML file")
+    if ":" in str(spec):
+        return _rotorpy_vehicle(str(spec))
+    if path.suffix or len(path.parts) > 1:
+        raise QuadnavError(f"{spec}: no such file: expected {vehicle_forms()}")
+    raise QuadnavError(f"{spec}: expected {vehicle_forms()}")
 
 
 def params_from_table(table: dict, where: str, name: str = "custom") -> VehicleParams:

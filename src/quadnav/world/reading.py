@@ -23,6 +23,7 @@ from quadnav.limits import (
     MAX_BLOCKS,
     MAX_FILE_BYTES,
     MAX_LINE,
+    format_number,
 )
 from quadnav.world.model import World
 
@@ -87,7 +88,7 @@ def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
         if not fields:
             continue
         if fields[0] not in keywords:
-            raise MapError(source, f"unknown keyword {fields[0]!r}: expected "
+            raise MapError(source, f"unknown keyword {shown_text(fields[0])!r}: expected "
                            + " or ".join(repr(k) for k in keywords), number)
         yield number, fields[0], fields[1:]
 
@@ -200,14 +201,15 @@ def check_coordinates(values: Sequence[float], source: str, line: int | None,
     for value in values:
         if value not in COORDINATE:
             raise MapError(source, f"{what}: expected coordinates {COORDINATE.describe()}, "
-                           f"got {value:g}", line)
+                           f"got {format_number(value)}", line)
     return list(values)
 
 
 def check_margin(value: float, source: str, line: int | None) -> float:
     """A map's margin, metres, in :data:`MARGIN`."""
     if value not in MARGIN:
-        raise MapError(source, f"margin: expected {MARGIN.describe()}, got {value:g}", line)
+        raise MapError(source, f"margin: expected {MARGIN.describe()}, got "
+                       f"{format_number(value)}", line)
     return value
 
 

@@ -1,0 +1,65 @@
+"""Refusals that say what they refuse: a value shown with the digits that put it out of
+range, a long token cut, an empty output path, a vehicle file that is missing or is no
+file at all."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from clitools import assert_user_error, run_here
+
+from quadnav.errors import MapError, QuadnavError
+from quadnav.limits import COORDINATE
+from quadnav.vehicle.params import load_params
+from quadnav.world import parse_map
+
+
+@pytest.mark.parametrize(("value", "shown"), [(10000.001, "10000.001"),
+                                              (-10000.0000001, "-10000.0000001"),
+                                              (1e300, "1e+300"), (20_000, "20,000")])
+def test_a_refused_value_is_shown_with_the_digits_that_refuse_it(value, shown):
+    with pytest.raises(QuadnavError) as info:
+        COORDINATE.check(value, "x")
+    assert str(info.value) == f"x: expected from -10,000 to 10,000 m, got {shown}"
+    with pytest.raises(MapError) as info:
+        corners = f"{value!r} 0 0 10 10 5" if value < 0 else f"0 0 0 {value!r} 10 5"
+        parse_map(f"boundary {corners}\n".encode(), "m.txt")
+    assert str(info.value).endswith(f"got {shown}")
+
+
+def test_a_long_unknown_keyword_is_cut():
+    keyword = "x" * 5_000
+    with pytest.raises(MapError) as info:
+        parse_map(f"boundary 0 0 0 10 10 5\n{keyword} 1 2 3\n".encode(), "m.txt")
+    message = str(info.value)
+    assert len(message) < 200
+    assert message.startswith("m.txt:2: unknown keyword 'xxxxxxxxxxxx...xxxx (5,000 characters)'")
+
+
+@pytest.mark.parametrize("command", [["fly"], ["plan"], ["traj"], ["batch", "forest"],
+                                     ["view", "DIR"], ["report", "DIR"], ["tune"]])
+@pytest.mark.parametrize("output", ["", "  "])
+def test_an_empty_output_path_is_refused_before_anything_is_written(tmp_path, command, output):
+    before = sorted(os.listdir(tmp_path))
+    result = run_here(*command, "-o", output, cwd=tmp_path)
+    assert_user_error(result, "argument -o/--output: expected a file or folder name, got "
+                      f"{output!r}")
+    assert sorted(os.listdir(tmp_path)) == before
+
+
+def test_a_missing_vehicle_file_is_called_missing(tmp_path):
+    with pytest.raises(QuadnavError) as info:
+        load_params(tmp_path / "tello_heavy.toml")
+    assert str(info.value).startswith(f"{tmp_path / 'tello_heavy.toml'}: no such file: expected")
+    with pytest.raises(QuadnavError, match=r"^boeing: expected a vehicle preset"):
+        load_params("boeing")
+
+
+def test_a_vehicle_file_that_is_no_regular_file_is_refused_without_reading_it(tmp_path):
+    fifo = tmp_path / "vehicle.toml"
+    os.mkfifo(fifo)
+    for path in (fifo, tmp_path):
+        with pytest.raises(QuadnavError) as info:
+            load_params(path)
+        assert str(info.value) == f"{path}: not a regular file: expected a vehicle TOML file"
