@@ -59,7 +59,31 @@ def test_a_missing_vehicle_file_is_called_missing(tmp_path):
 def test_a_vehicle_file_that_is_no_regular_file_is_refused_without_reading_it(tmp_path):
     fifo = tmp_path / "vehicle.toml"
     os.mkfifo(fifo)
-    for path in (fifo, tmp_path):
+    for path, kind in ((fifo, "a FIFO"), (tmp_path, "a folder")):
         with pytest.raises(QuadnavError) as info:
             load_params(path)
-        assert str(info.value) == f"{path}: not a regular file: expected a vehicle TOML file"
+        assert str(info.value) == f"{path}: {kind}, not a regular file: expected a vehicle TOML file"
+
+
+@pytest.mark.parametrize(("args", "expected"), [
+    (["fly", "{fifo}.txt"], "{fifo}.txt: a FIFO, not a regular file: expected a file"),
+    (["fly", "forest", "--start-goal", "{fifo}.txt"], "{fifo}.txt: a FIFO, not a regular file"),
+    (["fly", "forest", "--gains", "{fifo}.toml"], "{fifo}.toml: a FIFO, not a regular file: "
+     "expected a TOML file"),
+    (["fly", "--mission", "{fifo}.toml"], "{fifo}.toml: a FIFO, not a regular file"),
+    (["fly", "forest", "--controller", "{fifo}.py:Control"], "controller {fifo}.py: a FIFO, "
+     "not a Python file"),
+    (["traj", "forest", "--path", "{fifo}.txt"], "{fifo}.txt: a FIFO, not a regular file"),
+    (["track", "{fifo}.txt"], "{fifo}.txt: a FIFO, not a regular file"),
+    (["batch", "{fifo}.toml"], "{fifo}.toml: a FIFO, not a regular file"),
+    (["map", "info", "{fifo}.txt"], "{fifo}.txt: a FIFO, not a regular file"),
+])
+def test_a_fifo_named_as_an_input_is_refused_as_what_it_is(tmp_path, args, expected):
+    """Reading a FIFO waits for a writer: before, these hung or called it "no such file"."""
+    fifo = tmp_path / "input"
+    for suffix in (".txt", ".toml", ".py"):
+        os.mkfifo(f"{fifo}{suffix}")
+    output = [] if args[0] == "map" else ["-o", tmp_path / "out"]
+    result = run_here(*(arg.format(fifo=fifo) for arg in args), *output)
+    assert_user_error(result, expected.format(fifo=fifo))
+    assert not (tmp_path / "out").exists()

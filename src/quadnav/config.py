@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from quadnav.arrays import read_only
 from quadnav.errors import QuadnavError
+from quadnav.inputfiles import not_a_file, special_file
 
 C = TypeVar("C")
 
@@ -39,6 +40,9 @@ def vector_field(*values: float) -> Any:
 def read_toml(path: str | Path) -> dict[str, Any]:
     """The table of the TOML file at ``path``; QuadnavError naming the file and line."""
     path = Path(path)
+    kind = special_file(path)
+    if kind is not None:
+        raise QuadnavError(not_a_file(path, kind, "a TOML file"))
     try:
         with path.open("rb") as file:
             return tomllib.load(file)

@@ -32,6 +32,7 @@ from typing import Any, Generic, TypeVar
 import numpy as np
 
 from quadnav.errors import QuadnavError
+from quadnav.inputfiles import special_file
 
 Plugin = TypeVar("Plugin", bound=Callable)
 #: quadnav's own folder: frames in it are left out of a plug-in's traceback.
@@ -209,7 +210,9 @@ def _import(name: str, kind: str) -> ModuleType:
 def _load_file(path: str, kind: str) -> ModuleType:
     file = Path(path).expanduser().resolve()
     if not file.is_file():
-        raise QuadnavError(f"{kind} {path}: no such file")
+        what = special_file(file)
+        raise QuadnavError(f"{kind} {path}: " + (f"{what}, not a Python file" if what
+                                                  else "no such file"))
     # One module per file, under a name unlikely to collide, kept in sys.modules so that
     # the file's classes pickle and its own relative lookups work.
     name = f"quadnav_plugin_{file.stem}_{hashlib.sha1(str(file).encode()).hexdigest()[:8]}"

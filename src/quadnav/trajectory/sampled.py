@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
+from quadnav.inputfiles import special_file
 from quadnav.limits import COORDINATE, MAX_DURATION, MAX_SAMPLES, Range
 from quadnav.trajectory.export import CSV_HEADER, MP_ROWS
 from quadnav.trajectory.model import Trajectory
@@ -227,9 +228,10 @@ def _read_mp(lines: list[str], source: str, rate: float) -> SampledReference:
 
 
 def is_reference_file(path: str | Path) -> bool:
-    """Whether ``path`` names an existing file (a name too long to be one is not)."""
+    """Whether ``path`` names an existing file, or something there that is not a folder (a
+    FIFO, read as a file is, is refused as what it is); a name too long to be one is not."""
     try:
-        return Path(path).is_file()
+        return Path(path).is_file() or special_file(path) not in (None, "a folder")
     except OSError:
         return False
 

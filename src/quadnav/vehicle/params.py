@@ -31,6 +31,7 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.config import from_table, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
+from quadnav.inputfiles import not_a_file, special_file
 from quadnav.plugins import load_target, parse_spec
 
 #: Standard gravity, m/s^2.
@@ -192,8 +193,9 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
     path = Path(spec)
     if path.is_file():
         return params_from_table(read_toml(path), str(path), path.stem)
-    if path.exists():
-        raise QuadnavError(f"{spec}: not a regular file: expected a vehicle TOML file")
+    kind = special_file(path)
+    if kind is not None:
+        raise QuadnavError(not_a_file(spec, kind, "a vehicle TOML file"))
     if ":" in str(spec):
         return _rotorpy_vehicle(str(spec))
     if path.suffix or len(path.parts) > 1:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from quadnav.errors import MapError
 from quadnav.files import atomic_output
+from quadnav.inputfiles import special_file
 from quadnav.world import builtin, courses
 from quadnav.world.jsonmap import format_json_map, parse_json_map
 from quadnav.world.model import World
@@ -48,7 +49,7 @@ def load_world(source: str | Path | World) -> World:
         is_file = Path(source).is_file()
     except OSError:  # e.g. a name too long to be a file: maybe a built-in world spec
         is_file = False
-    if is_file:
+    if is_file or special_file(source):
         return read_map(source)
     if courses.is_course_name(source):
         data, entry = courses.read_course_file(str(source), courses.MAP)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import MapError, MapWarning
+from quadnav.inputfiles import special_file
 from quadnav.limits import (
     BOUNDARY_SIDE,
     COORDINATE,
@@ -45,6 +46,9 @@ _SHOWN = 24
 def read_file(path: str | Path) -> bytes:
     """The bytes of a map, start/goal, path or reference file; MapError if it cannot be read or is
     over :data:`~quadnav.limits.MAX_FILE_BYTES`."""
+    kind = special_file(path)
+    if kind is not None:
+        raise MapError(str(path), f"{kind}, not a regular file: expected a file")
     try:
         with Path(path).open("rb") as file:
             data = file.read(MAX_FILE_BYTES + 1)
