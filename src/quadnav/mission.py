@@ -263,6 +263,7 @@ class Mission:
             "path_length_m": self.plan.length if self.plan.solved else None,
             "path_vertices": len(self.plan.path) if self.plan.solved else 0,
             "planning_time_s": self.timings["planning"],
+            "search_stopped_by": self.plan.stats.stopped_by,
             "trajectory_time_s": self.timings.get("trajectory"),
             "trajectory_duration_s": self.trajectory.duration if self.trajectory else None,
         } | self.measured

@@ -63,6 +63,7 @@ def plan_summary(problem: PlanningProblem, result: PlanResult, settings: Planner
         },
         "stats": {
             "iterations": stats.iterations,
+            "stopped_by": stats.stopped_by,
             "nodes": stats.nodes,
             "seconds": stats.seconds,
             "time_to_first": stats.time_to_first,
