@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import io
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -43,6 +44,7 @@ from quadnav.mission import Mission
 from quadnav.missionconfig import MISSION_FILE, MissionConfig
 from quadnav.planning.report import path_csv
 from quadnav.planning.result import IntArray, tree_edges
+from quadnav.runcheck import check_metrics, check_parents, check_rows, read_json_object
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.sim.flight import Ending, Flight
 from quadnav.tracking import Tracking
@@ -246,32 +248,34 @@ def run_outcome(metrics: dict) -> str:
     return f"{metrics['ending']} at {metrics['contact_time_s']:.2f} s"
 
 
-def read_table(path: Path, header: str, text: str | None = None) -> np.ndarray:
+#: The columns of flight.csv holding the motor commands: unknown (NaN) for a real drone.
+MOTOR_COLUMNS = (11, 12, 13, 14)
+
+
+def read_table(path: Path, header: str, text: str | None = None, least: int = 0,
+               times: bool = False, unknown: tuple[int, ...] = ()) -> np.ndarray:
     """The numbers of the CSV file ``path`` (or of its ``text``, already read) whose first
-    line must be ``header``; QuadnavError naming the file if not."""
+    line must be ``header``, at least ``least`` rows of them, finite (but in the ``unknown``
+    columns), with ``times`` a first column that never goes back (see
+    :func:`~quadnav.runcheck.check_rows`); QuadnavError naming the file if not."""
     try:
         with io.StringIO(text) if text is not None else path.open(encoding="utf-8") as file:
             first = file.readline().strip()
             if first != header:
                 raise QuadnavError(f"{path}:1: expected the header {header!r}, got {first!r}")
-            rows = np.loadtxt(file, delimiter=",", ndmin=2)
+            with warnings.catch_warnings():  # no rows: said below, with the file's name
+                warnings.filterwarnings("ignore", "loadtxt: input contained no data")
+                rows = np.loadtxt(file, delimiter=",", ndmin=2)
     except OSError as error:
         raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
-    except ValueError as error:
+    except (ValueError, UnicodeDecodeError) as error:
         raise QuadnavError(f"{path}: expected rows of numbers: {error}") from None
     width = header.count(",") + 1
     if rows.size and rows.shape[1] != width:
         raise QuadnavError(f"{path}: expected {width} columns, got {rows.shape[1]}")
-    return rows.reshape(-1, width)
-
-
-def _json_file(path: Path) -> dict:
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
-    except json.JSONDecodeError as error:
-        raise QuadnavError(f"{path}:{error.lineno}: not valid JSON: {error.msg}") from None
+    rows = rows.reshape(-1, width)
+    check_rows(rows, path, least, times, unknown)
+    return rows
 
 
 def read_run(folder: str | Path) -> Run:
@@ -283,21 +287,27 @@ def read_run(folder: str | Path) -> Run:
         raise QuadnavError(f"{folder}: not a quadnav fly or track output folder (no "
                            "metrics.json); run quadnav fly -o DIR or quadnav track REF -o DIR "
                            "first")
+    flown = (folder / "flight.csv").is_file()
+    metrics = read_json_object(folder / "metrics.json")
+    check_metrics(metrics, folder / "metrics.json", flown, "reference" in metrics)
+    parameters = read_json_object(folder / "parameters.json")
     tree = (read_table(folder / "tree.csv", TREE_HEADER) if (folder / "tree.csv").is_file()
             else np.zeros((0, 4)))
-    path = read_table(folder / "path.csv", "x,y,z") if (folder / "path.csv").is_file() else None
+    parents = check_parents(tree[:, 3], folder / "tree.csv")
+    path = (read_table(folder / "path.csv", "x,y,z", least=2)
+            if (folder / "path.csv").is_file() else None)
     trajectory = flight = truth = None
-    if (folder / "flight.csv").is_file():
-        t = read_table(folder / "trajectory.csv", CSV_HEADER)
+    if flown:
+        t = read_table(folder / "trajectory.csv", CSV_HEADER, least=1, times=True)
         trajectory = Samples(t[:, 0], t[:, 1:4], t[:, 4:7], t[:, 7:10], t[:, 10])
-        f = read_table(folder / "flight.csv", FLIGHT_HEADER)
-        flight = FlightTable(f[:, 0], f[:, 1:4], f[:, 4:7], f[:, 7:11], f[:, 11:15],
+        f = read_table(folder / "flight.csv", FLIGHT_HEADER, least=1, times=True,
+                       unknown=MOTOR_COLUMNS)
+        flight = FlightTable(f[:, 0], f[:, 1:4], f[:, 4:7], f[:, 7:11], f[:, list(MOTOR_COLUMNS)],
                              f[:, 15:18])
         if (folder / "truth.csv").is_file():
-            truth = read_table(folder / "truth.csv", TRUTH_HEADER)
-    return Run(folder, read_map(folder / "map.json"), _json_file(folder / "metrics.json"),
-               _json_file(folder / "parameters.json"), tree[:, 0:3],
-               tree[:, 3].astype(np.int64), path, trajectory, flight, truth)
+            truth = read_table(folder / "truth.csv", TRUTH_HEADER, least=1, times=True)
+    return Run(folder, read_map(folder / "map.json"), metrics, parameters, tree[:, 0:3],
+               parents, path, trajectory, flight, truth)
 
 
 def drift(flight: FlightTable, truth: FloatArray) -> FloatArray:
