@@ -38,7 +38,8 @@ def course_from(args: argparse.Namespace) -> Course:
     """The course file given (or none), with the flags given set on top."""
     changes: dict[str, Any] = {key: getattr(args, dest) for dest, (_, key) in COURSE_FLAGS.items()
                                if getattr(args, dest) is not None}
-    names = {key: flag for dest, (flag, key) in COURSE_FLAGS.items()}
+    names = {key: flag for dest, (flag, key) in COURSE_FLAGS.items()
+             if getattr(args, dest) is not None}
     if args.maps is not None:
         query = {key: getattr(args, key) for key in ("start", "goal")
                  if getattr(args, key) is not None}

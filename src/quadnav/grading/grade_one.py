@@ -25,6 +25,7 @@ from typing import Any
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
+from quadnav.grading.course import PART_KEYS
 from quadnav.mission import Mission, failure_reason
 from quadnav.missionconfig import MissionConfig
 from quadnav.plugins import user_traceback
@@ -142,8 +143,8 @@ def grade_mission(context: GradeContext, job: GradeJob) -> dict[str, Any]:
         try:
             config = MissionConfig.from_table(job.table, source="the course")
             if job.parts:
-                config = config.with_changes(job.parts, {key: f"the submission's {key}"
-                                                         for key in job.parts})
+                config = config.with_changes(job.parts, {
+                    key: f"the submission's {part}" for part, key in PART_KEYS.items()})
             mission = config.fly()
         except Exception as error:  # the submission's code may raise anything
             row = _error_row(job, error)
