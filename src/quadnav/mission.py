@@ -456,7 +456,8 @@ def path_reference(problem: PlanningProblem, path: FloatArray, settings: Mission
             start at the start and end at the goal within the goal tolerance (exit 1).
     """
     chosen = load_trajectory_class(str(settings.reference), with_points=True)
-    reference = flat_reference(chosen.build(path), chosen.text, 1.0 / settings.sim.control_rate,
+    built = chosen.build(path, problem.world, problem.start, problem.goal)
+    reference = flat_reference(built, chosen.text, 1.0 / settings.sim.control_rate,
                                settings.reference_duration)
     check_ends(reference, problem.start, problem.goal, settings.sim.goal_tolerance)
     window = leg_window(reference, problem.free_world, len(problem.start_leg) > 1,
