@@ -62,7 +62,8 @@ def grade(args: argparse.Namespace) -> int:
     run = Grade(course, args.submission, folder)
     maps, seeds = len(course.maps), len(course.seeds)
     baseline = ", and quadnav's own parts on them" if course.baseline else ""
-    print(f"grading {args.submission} on {len(run.missions)} missions ({maps} map"
+    print(f"grading {args.submission} on {len(run.missions)} mission"
+          f"{'s' * (len(run.missions) > 1)} ({maps} map"
           f"{'s' * (maps > 1)} x {seeds} seed{'s' * (seeds > 1)}){baseline}: "
           f"{len(run.todo)} to fly, {len(run.rows)} kept from an earlier grade in {folder}",
           flush=True)
