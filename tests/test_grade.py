@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
+import signal
+import subprocess
+import time
 from pathlib import Path
 
 import pytest
-from clitools import run_here
+from clitools import QUADNAV, run_here
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: Two shipped course maps with their queries; a cheap search budget for the baseline.
@@ -41,6 +45,8 @@ planner = {{improve = 300}}
 #: A student's planner that imports a file of the submission by module name: the straight
 #: line on the map of two pillars (through one of them), else the example's graph search.
 PLANNER = """
+import time
+
 import numpy as np
 from search_{tag} import graph_search
 
@@ -53,6 +59,12 @@ def straight_on_pillars(world, start, goal, margin):
 
 def search(world, start, goal, margin):
     return graph_search(world, start, goal, margin, resolution=0.5)
+
+
+def stuck_in_the_forest(world, start, goal, margin):
+    while len(world.blocks) != 2:  # until the grade is stopped
+        time.sleep(0.05)
+    return search(world, start, goal, margin)
 """
 #: A student's controllers: the example's PD law, one that raises after 0.5 s, one that
 #: returns keys of no control abstraction.
@@ -72,6 +84,14 @@ class Raises(PDAttitude):
 
     def thrust_over(self, tilt):
         return {{"cmd_thrust": self.mass * 9.81 / tilt, "cmd_q": [0, 0, 0, 1]}}
+
+
+class Biased(PDAttitude):
+    # flies 6 cm off the reference along x and along y
+
+    def update(self, t, state, flat_output):
+        aim = flat_output | {{"x": flat_output["x"] + [0.06, 0.06, 0.0]}}
+        return super().update(t, state, aim)
 
 
 class WrongKeys(PDAttitude):
@@ -207,6 +227,51 @@ def test_a_grade_again_flies_only_what_changed(faulty, tmp_path):
     assert result.returncode == 1  # a controller that holds the hover thrust
     grade = grade_json(out)
     assert [m["submission"]["outcome"] for m in grade["missions"]] == ["missed goal"] * 2
+
+
+def test_strict_grading_fails_a_flight_that_kept_less_margin(tmp_path):
+    student = submission(tmp_path / "fay", "strict")
+    spec = course(tmp_path, 1, "Biased", "search")
+    pillars = ["--maps", "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1",
+               "--goal", "-1.1", "3", "1.5", "--no-baseline", "-o", tmp_path / "out"]
+    lenient = run_here("grade", student, "--course", spec, *pillars)
+    assert lenient.returncode == 0, lenient.stdout
+    row = grade_json(tmp_path / "out")["missions"][0]["submission"]
+    assert row["passed"] and 0.05 < row["metrics"]["margin_shortfall_m"] < 0.07
+    strict = run_here("grade", student, "--course", spec, *pillars, "--strict")
+    assert strict.returncode == 1
+    assert "1 to fly, 0 kept" in strict.stdout  # graded by another rule: flown again
+    grade = grade_json(tmp_path / "out")
+    row = grade["missions"][0]["submission"]
+    assert row["outcome"] == "margin"
+    assert re.fullmatch(r"kept 0\.1\d\d m of the 0\.2 m margin asked off the legs, least at "
+                        r"t = \d+\.\d\d s", row["reason"]), row["reason"]
+    assert grade["strict"] and "fly --strict" in grade["rule"]
+
+
+def test_a_stopped_grade_keeps_the_missions_finished(tmp_path):
+    student = submission(tmp_path / "gus", "stopped")
+    spec = course(tmp_path, 1, "Good", "stuck_in_the_forest")
+    out = tmp_path / "out"
+    command = [*QUADNAV, "grade", student, "--course", spec, "--no-baseline", "-o", out]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    first = out / "missions/submission/rotorpy-double_pillar/seed-0/grade-result.json"
+    waited = 0
+    while not first.exists() and process.poll() is None and waited < 2400:
+        time.sleep(0.05)
+        waited += 1
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert err.startswith("quadnav: stopped: kept 1 of 2 missions"), err
+    grade = grade_json(out)
+    assert not grade["complete"] and grade["score"] == {"passed": 1, "graded": 1, "total": 2}
+    assert "stopped before every mission flew" in (out / "grade.html").read_text()
+    again = run_here("grade", student, "--course", spec, "--no-baseline", "--maps",
+                     "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
+                     "-1.1", "3", "1.5", "-o", out)
+    assert again.returncode == 0 and "0 to fly, 1 kept from an earlier grade" in again.stdout
 
 
 def test_wrong_keys_fail_their_mission_with_the_line(tmp_path):

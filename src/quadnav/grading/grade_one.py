@@ -91,8 +91,9 @@ class GradeJob:
         table: the mission with quadnav's own parts (:meth:`MissionConfig.table`).
         parts: the keys of a mission file that the submission's parts set, with their
             specs (empty for the baseline).
-        fingerprint: what the row depends on (the mission, and the submission's files),
-            to tell whether a row kept in the folder is still this mission's.
+        fingerprint: what the row depends on (the mission, the grading rule, the
+            submission's files), to tell whether a row kept in the folder is still this
+            mission's (:func:`job_fingerprint`).
     """
 
     part: str
@@ -109,11 +110,11 @@ class GradeJob:
         return f"missions/{self.part}/{self.key}"
 
 
-def job_fingerprint(table: Mapping[str, Any], parts: Mapping[str, str],
+def job_fingerprint(table: Mapping[str, Any], parts: Mapping[str, str], strict: bool,
                     submission: Path | None) -> str:
-    """A digest of the mission ``table``, the ``parts`` and, with a ``submission``
-    folder, the contents of every Python file in it."""
-    digest = hashlib.sha256(json.dumps([table, parts], sort_keys=True).encode())
+    """A digest of the mission ``table``, the ``parts``, the grading rule (``strict``)
+    and, with a ``submission`` folder, the contents of every Python file in it."""
+    digest = hashlib.sha256(json.dumps([table, parts, strict], sort_keys=True).encode())
     if submission is not None:
         for path in sorted(submission.rglob("*.py")):
             digest.update(str(path.relative_to(submission)).encode())

@@ -11,6 +11,7 @@ are written at the end, and also when the run is stopped, from every mission fin
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -61,10 +62,12 @@ class Grade:
             table = _checked(mission, course)
             self.jobs.append(GradeJob(SUBMISSION, mission.key, mission.entry.map, mission.seed,
                                       table, parts,
-                                      job_fingerprint(table, parts, self.context.submission)))
+                                      job_fingerprint(table, parts, course.strict,
+                                                      self.context.submission)))
         if course.baseline:
             self.jobs += [GradeJob(BASELINE, job.key, job.map, job.seed, job.table,
-                                   fingerprint=job_fingerprint(job.table, {}, None))
+                                   fingerprint=job_fingerprint(job.table, {}, course.strict,
+                                                               None))
                           for job in self.jobs]
         self.rows: dict[tuple[str, str], dict[str, Any]] = {}
         for job in self.jobs:
@@ -112,11 +115,13 @@ def _warm_up(context: GradeContext) -> None:
 def _checked(mission: GradedMission, course: Course) -> dict[str, Any]:
     """The table of ``mission`` with quadnav's own parts, checked: its settings built,
     its map read and its query checked (QuadnavError naming the map and seed: the
-    course's input)."""
+    course's input; warnings are left to the mission's row)."""
     config = mission.config(course)
     try:
-        settings = config.settings()
-        config.problem(config.world(), settings.body)
+        with warnings.catch_warnings():  # each mission's row keeps its warnings
+            warnings.simplefilter("ignore")
+            settings = config.settings()
+            config.problem(config.world(), settings.body)
     except QuadnavError as error:
         raise QuadnavError(f"the course's map {mission.entry.map} (seed {mission.seed}): "
                            f"{error}") from None
