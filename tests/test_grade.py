@@ -94,6 +94,12 @@ class Biased(PDAttitude):
         return super().update(t, state, aim)
 
 
+class Sinking(PDAttitude):
+    def update(self, t, state, flat_output):
+        aim = flat_output | {{"x": flat_output["x"] - [0.0, 0.0, 3.0]}}
+        return super().update(t, state, aim)
+
+
 class WrongKeys(PDAttitude):
     def update(self, t, state, flat_output):
         return {{"thrust": 1.0}}
@@ -124,8 +130,8 @@ def grade_json(folder: Path) -> dict:
 def test_a_good_submission_passes_every_mission(tmp_path):
     student = submission(tmp_path / "alice", "good")
     spec = course(tmp_path, 2, "Good", "search")
-    result = run_here("grade", student, "--course", spec, "--no-baseline", "-o",
-                      tmp_path / "out")
+    result = run_here("grade", student, "--course", spec, "--no-baseline", "--workers", "2",
+                      "-o", tmp_path / "out")
     assert result.returncode == 0, result.stderr
     assert "score: 4 of 4 missions passed" in result.stdout
     grade = grade_json(tmp_path / "out")
@@ -272,6 +278,19 @@ def test_a_stopped_grade_keeps_the_missions_finished(tmp_path):
                      "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
                      "-1.1", "3", "1.5", "-o", out)
     assert again.returncode == 0 and "0 to fly, 1 kept from an earlier grade" in again.stdout
+
+
+def test_a_crash_fails_its_mission_saying_where_and_when(tmp_path):
+    student = submission(tmp_path / "hal", "crash")
+    spec = course(tmp_path, 1, "Sinking", "search")
+    result = run_here("grade", student, "--course", spec, "--maps",
+                      "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
+                      "-1.1", "3", "1.5", "--no-baseline", "-o", tmp_path / "out")
+    assert result.returncode == 1
+    row = grade_json(tmp_path / "out")["missions"][0]["submission"]
+    assert row["outcome"] == "crashed", row["reason"]
+    assert re.fullmatch(r"hit the floor at \d+\.\d\d m/s at t = \d+\.\d\d s", row["reason"])
+    assert (tmp_path / "out" / row["figure"]).is_file()  # the flight down to the floor
 
 
 def test_wrong_keys_fail_their_mission_with_the_line(tmp_path):
