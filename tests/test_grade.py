@@ -69,6 +69,8 @@ def stuck_in_the_forest(world, start, goal, margin):
 #: A student's controllers: the example's PD law, one that raises after 0.5 s, one that
 #: returns keys of no control abstraction.
 CONTROLLER = """
+import sys
+
 from pd_{tag} import PDAttitude
 
 
@@ -98,6 +100,11 @@ class Sinking(PDAttitude):
     def update(self, t, state, flat_output):
         aim = flat_output | {{"x": flat_output["x"] - [0.0, 0.0, 3.0]}}
         return super().update(t, state, aim)
+
+
+class Quits(PDAttitude):
+    def update(self, t, state, flat_output):
+        sys.exit("debugging")
 
 
 class WrongKeys(PDAttitude):
@@ -306,6 +313,19 @@ def test_wrong_keys_fail_their_mission_with_the_line(tmp_path):
                              "flat_output) returned thrust: expected the commands of a "
                              "control abstraction: cmd_motor_speeds, cmd_motor_thrusts, "
                              "cmd_thrust with cmd_moment, cmd_q or cmd_w, or cmd_v")
+
+
+def test_a_part_that_calls_exit_fails_its_mission_not_the_grader(tmp_path):
+    student = submission(tmp_path / "ivy", "quits")
+    spec = course(tmp_path, 1, "Quits", "search")
+    result = run_here("grade", student, "--course", spec, "--no-baseline", "-o",
+                      tmp_path / "out")
+    assert result.returncode == 1, result.stderr
+    assert "score: 0 of 2 missions passed" in result.stdout
+    for mission in grade_json(tmp_path / "out")["missions"]:
+        row = mission["submission"]
+        assert row["outcome"] == "part error" and row["reason"] == "SystemExit: debugging"
+        assert 'File "controller.py", line ' in row["traceback"]
 
 
 def test_a_missing_file_is_the_submissions_failure(tmp_path):

@@ -147,7 +147,7 @@ def grade_mission(context: GradeContext, job: GradeJob) -> dict[str, Any]:
                 config = config.with_changes(job.parts, {
                     key: f"the submission's {part}" for part, key in PART_KEYS.items()})
             mission = config.fly()
-        except Exception as error:  # the submission's code may raise anything
+        except (Exception, SystemExit) as error:  # the submission's code may do anything
             row = _error_row(job, error)
             with replaced_folder(folder, (*RUN_FILES, ERROR_FILE)) as staging:
                 (staging / ERROR_FILE).write_text(
@@ -171,7 +171,7 @@ def _base_row(job: GradeJob) -> dict[str, Any]:
             "parts": dict(job.parts), "folder": job.folder, "fingerprint": job.fingerprint}
 
 
-def _error_row(job: GradeJob, error: Exception) -> dict[str, Any]:
+def _error_row(job: GradeJob, error: BaseException) -> dict[str, Any]:
     """The row of a mission whose part failed: its one line and its own traceback (the
     whole traceback for an error quadnav did not expect)."""
     if isinstance(error, QuadnavError):  # quadnav's own line
