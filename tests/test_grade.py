@@ -150,6 +150,9 @@ def test_a_good_submission_passes_every_mission(tmp_path):
     for mission in grade["missions"]:
         row = mission["submission"]
         assert row["passed"] and row["outcome"] == "passed" and row["reason"] == ""
+        numbers = row["metrics"]
+        assert (0.5 * numbers["trajectory_duration_s"] < numbers["time_to_goal_s"]
+                < numbers["flight_time_s"])
         assert row["parts"]["controller.name"] == f"{student / 'controller.py'}:Good"
         run = tmp_path / "out" / row["folder"]
         metrics = json.loads((run / "metrics.json").read_text())

@@ -24,9 +24,9 @@ GRADE_JSON, GRADE_CSV, GRADE_HTML = "grade.json", "grade.csv", "grade.html"
 #: Every file a grade writes into its folder, besides ``missions/``.
 GRADE_FILES = (GRADE_JSON, GRADE_CSV, GRADE_HTML)
 #: The columns of grade.csv: the mission, the submission's result, the baseline's.
-CSV_COLUMNS = ("map", "seed", "passed", "outcome", "reason", "trajectory_duration_s",
+CSV_COLUMNS = ("map", "seed", "passed", "outcome", "reason", "time_to_goal_s",
                "rms_tracking_error_m", "flight_margin_m", "baseline_passed",
-               "baseline_trajectory_duration_s", "baseline_rms_tracking_error_m", "folder")
+               "baseline_time_to_goal_s", "baseline_rms_tracking_error_m", "folder")
 STYLE = """<style>
 td.pass { background: #e6f4ea; color: #1a7f37; font-weight: 600; }
 td.fail { background: #fdecea; color: #c62828; font-weight: 600; }
@@ -80,7 +80,7 @@ def grade_content(course: Course, submission: Path, rows: Sequence[dict[str, Any
 
 def comparison(missions: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
     """Over the missions both the submission and the baseline passed: how many, and the
-    mean trajectory duration (s) and RMS tracking error (m) of each; None without such
+    mean time to goal (s) and RMS tracking error (m) of each; None without such
     missions."""
     both = [m for m in missions if m[BASELINE] is not None and m[SUBMISSION] is not None
             and m[SUBMISSION]["passed"] and m[BASELINE]["passed"]]
@@ -92,7 +92,7 @@ def comparison(missions: Sequence[dict[str, Any]]) -> dict[str, Any] | None:
 
     return {"missions": len(both),
             **{f"{part}_{key}": mean(part, key) for part in (SUBMISSION, BASELINE)
-               for key in ("trajectory_duration_s", "rms_tracking_error_m")}}
+               for key in ("time_to_goal_s", "rms_tracking_error_m")}}
 
 
 def write_grade(folder: Path, course: Course, submission: Path,
@@ -120,9 +120,9 @@ def grade_csv(content: dict[str, Any]) -> str:
             continue
         metrics, base_metrics = own["metrics"], base.get("metrics", {})
         writer.writerow([mission["map"], mission["seed"], own["passed"], own["outcome"],
-                         own["reason"], metrics.get("trajectory_duration_s"),
+                         own["reason"], metrics.get("time_to_goal_s"),
                          metrics.get("rms_tracking_error_m"), metrics.get("flight_margin_m"),
-                         base.get("passed"), base_metrics.get("trajectory_duration_s"),
+                         base.get("passed"), base_metrics.get("time_to_goal_s"),
                          base_metrics.get("rms_tracking_error_m"), own["folder"]])
     return out.getvalue()
 
@@ -165,7 +165,7 @@ def _beside(metrics: dict[str, Any], base: dict[str, Any] | None, key: str,
 
 def _mission_rows(content: dict[str, Any]) -> str:
     """A line per mission: its result and why, its numbers beside the baseline's, links."""
-    header = ["map", "seed", "result", "why", "trajectory (s)", "RMS tracking error (cm)",
+    header = ["map", "seed", "result", "why", "time to goal (s)", "RMS tracking error (cm)",
               "margin kept (m)", "baseline", "run folder"]
     lines = []
     for mission in content["missions"]:
@@ -180,7 +180,7 @@ def _mission_rows(content: dict[str, Any]) -> str:
         lines.append("<tr>" + "".join([
             f"<td>{_escape(mission['label'])}</td>", f"<td>{mission['seed']}</td>",
             _result_cell(own), f'<td class="why">{_escape(own["reason"])}</td>',
-            f"<td>{_beside(metrics, base_metrics, 'trajectory_duration_s')}</td>",
+            f"<td>{_beside(metrics, base_metrics, 'time_to_goal_s')}</td>",
             f"<td>{_beside(metrics, base_metrics, 'rms_tracking_error_m', 100)}</td>",
             f"<td>{_number(metrics.get('flight_margin_m'), digits=3)}</td>",
             _result_cell(base), f"<td>{' '.join(links)}</td>"]) + "</tr>")
@@ -229,14 +229,15 @@ def grade_html(content: dict[str, Any], folder: Path) -> str:
     compared = content["comparison"]
     if compared is not None:
         body.append(
-            f"<p>On the {compared['missions']} missions both passed: trajectory "
-            f"{compared['submission_trajectory_duration_s']:.2f} s against "
-            f"{compared['baseline_trajectory_duration_s']:.2f} s on average, RMS tracking "
+            f"<p>On the {compared['missions']} missions both passed: time to goal "
+            f"{compared['submission_time_to_goal_s']:.2f} s against "
+            f"{compared['baseline_time_to_goal_s']:.2f} s on average, RMS tracking "
             f"error {100 * compared['submission_rms_tracking_error_m']:.2f} cm against "
             f"{100 * compared['baseline_rms_tracking_error_m']:.2f} cm.</p>")
     body += ["<h2>Missions</h2>", _matrix(content),
-             "<p>The trajectory's duration and the RMS tracking error of each mission, with "
-             "the baseline's in brackets; the least margin the flight kept off the legs.</p>",
+             "<p>The time to goal (when the flight came within the goal tolerance to stay) "
+             "and the RMS tracking error of each mission, with the baseline's in brackets; "
+             "the least margin the flight kept off the legs.</p>",
              _mission_rows(content)]
     failed = [m for m in content["missions"] if m[SUBMISSION] and not m[SUBMISSION]["passed"]]
     if failed:
