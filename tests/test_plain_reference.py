@@ -98,6 +98,22 @@ class Unbuilt(Spiral):
         raise RuntimeError("no spiral today")
 
 
+class WorldTraj:
+    """MEAM620's shape: plans for itself from the map, the start and the goal, past the
+    pillar when the straight line is blocked, and flies rotorpy's MinSnap through it."""
+
+    def __init__(self, world, start, goal):
+        from rotorpy.trajectories.minsnap import MinSnap
+
+        blocked = not world.segments_free(np.array([[start, goal]]))[0]
+        self.points = np.array([start, *([[-0.875, 1.0, 1.5]] if blocked else []), goal])
+        self.trajectory = MinSnap(self.points, v_avg=1.0, verbose=False)
+        self.t_keyframes = self.trajectory.t_keyframes
+
+    def update(self, t):
+        return self.trajectory.update(t)
+
+
 class Elsewhere:
     """Stays 1 m above where a path starts."""
 
@@ -179,6 +195,14 @@ def test_a_class_from_a_start_in_the_margin_keeps_it_off_the_legs():
     # the path's straight segments).
     assert metrics["trajectory_leg_margin_m"] == pytest.approx(0.1, abs=1e-6)
     assert 0.2 - 2e-3 <= metrics["trajectory_margin_m"] < 0.21
+
+
+def test_a_class_that_plans_for_itself_is_given_the_map_start_and_goal(classes):
+    mission = fly_mission(load_world("course:rotorpy/pillar"), (-4, 0, 1.5), (3, 0, 1.5),
+                          settings=MissionSettings(reference=f"{classes}:WorldTraj"))
+    assert mission.success, mission.metrics()
+    flown = mission.trajectory.samples.position  # through its own waypoint past the pillar
+    assert np.linalg.norm(flown - [-0.875, 1.0, 1.5], axis=1).min() < 2e-3
 
 
 def test_rotorpys_circle_is_tracked_with_its_yaw(tmp_path):

@@ -324,6 +324,33 @@ def flight_succeeded(flight: Flight, goal_tolerance: float) -> bool:
             and flight.final_error <= goal_tolerance)
 
 
+def failure_reason(mission: Mission) -> str:
+    """One line saying why ``mission`` failed: no path (and why), or why its flight failed
+    (:func:`flight_failure`)."""
+    if mission.flight is None:
+        return f"no path: {mission.plan.message}"
+    return flight_failure(mission.flight, mission.settings.sim.goal_tolerance)
+
+
+def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
+    """One line saying why a flight failed: a collision, hitting the floor, leaving the map,
+    diverging, the body leaving the map, or ending more than ``goal_tolerance`` m from
+    ``goal``."""
+    if flight.contact_block is not None:
+        return (f"collided with block {flight.contact_block} at t = "
+                f"{flight.contact_time:.2f} s")
+    if flight.ending is Ending.FLOOR:
+        return f"hit the floor at {flight.floor_speed:.2f} m/s at t = {flight.contact_time:.2f} s"
+    if flight.contact_time is not None:
+        return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
+    if flight.body_outside:
+        outside = flight.body_outside
+        return (f"the body left the map by {100 * outside.depth:.1f} cm for "
+                f"{outside.duration:.2f} s from t = {outside.since:.2f} s")
+    return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
+            f"{100 * goal_tolerance:.0f} cm)")
+
+
 def min_clearance(flight: Flight, world: World) -> float | None:
     """Closest approach of the vehicle's centre to a real block's surface over the
     recorded samples, m (None for a map with no blocks)."""
@@ -430,7 +457,8 @@ def path_reference(problem: PlanningProblem, path: FloatArray, settings: Mission
             start at the start and end at the goal within the goal tolerance (exit 1).
     """
     chosen = load_trajectory_class(str(settings.reference), with_points=True)
-    reference = flat_reference(chosen.build(path), chosen.text, 1.0 / settings.sim.control_rate,
+    built = chosen.build(path, problem.world, problem.start, problem.goal)
+    reference = flat_reference(built, chosen.text, 1.0 / settings.sim.control_rate,
                                settings.reference_duration)
     check_ends(reference, problem.start, problem.goal, settings.sim.goal_tolerance)
     window = leg_window(reference, problem.free_world, len(problem.start_leg) > 1,

@@ -40,6 +40,9 @@ COMMANDS: dict[str, Command] = {
     "refly": Command("refly_command", "add_refly_command",
                      "fly a run folder's mission, or one mission of a batch, again, with "
                      "figures"),
+    "grade": Command("grade_command", "add_grade_command",
+                     "grade a submission's own controller, planner or trajectory on a "
+                     "course's maps and seeds, with a TA's report"),
     "tune": Command("tune_command", "add_tune_command",
                     "tune the controller's gains by an Optuna search (needs quadnav[tune])"),
     "animate": Command("animate_command", "add_animate_command",

@@ -40,13 +40,13 @@ from quadnav.mission import (
     DEFAULT_SPEED,
     DEFAULT_TIME_CAP,
     Mission,
+    failure_reason,
     fly_problem,
 )
 from quadnav.missionconfig import MissionConfig
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
-from quadnav.sim.flight import Ending, Flight
 
 #: Exit code of a flight that collided, missed the goal or found no path.
 EXIT_FAILED = 1
@@ -75,32 +75,6 @@ def write_mission(mission: Mission, config: MissionConfig, folder: Path, figures
     print("wrote " + ", ".join(str(folder / name) for name in written))
     failure = None if mission.success else failure_reason(mission)
     return EXIT_FAILED if flight_failed(failure, short, strict) else 0
-
-
-def failure_reason(mission: Mission) -> str:
-    """One line saying why the mission failed."""
-    if mission.flight is None:
-        return f"no path: {mission.plan.message}"
-    return flight_failure(mission.flight, mission.settings.sim.goal_tolerance)
-
-
-def flight_failure(flight: Flight, goal_tolerance: float, goal: str = "the goal") -> str:
-    """One line saying why a flight failed: a collision, hitting the floor, leaving the map,
-    diverging, the body leaving the map, or ending more than ``goal_tolerance`` m from
-    ``goal``."""
-    if flight.contact_block is not None:
-        return (f"collided with block {flight.contact_block} at t = "
-                f"{flight.contact_time:.2f} s")
-    if flight.ending is Ending.FLOOR:
-        return f"hit the floor at {flight.floor_speed:.2f} m/s at t = {flight.contact_time:.2f} s"
-    if flight.contact_time is not None:
-        return f"{flight.ending.value} at t = {flight.contact_time:.2f} s"
-    if flight.body_outside:
-        outside = flight.body_outside
-        return (f"the body left the map by {100 * outside.depth:.1f} cm for "
-                f"{outside.duration:.2f} s from t = {outside.since:.2f} s")
-    return (f"ended {100 * flight.final_error:.1f} cm from {goal} (tolerance "
-            f"{100 * goal_tolerance:.0f} cm)")
 
 
 def print_summary(mission: Mission) -> bool:

@@ -366,7 +366,7 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
         tracking_errors,
         warn_margin_shortfall,
     )
-    from quadnav.cli.fly_command import flight_failure
+    from quadnav.mission import flight_failure
     from quadnav.report.run_writer import write_run
     from quadnav.runs import RunContent
 

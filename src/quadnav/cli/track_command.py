@@ -22,9 +22,10 @@ from quadnav.cli.flight_args import (
     vehicle_and_gains,
 )
 from quadnav.cli.flight_lines import simulation_time, tracking_errors
-from quadnav.cli.fly_command import EXIT_FAILED, flight_failure
+from quadnav.cli.fly_command import EXIT_FAILED
 from quadnav.cli.progress import fraction_bar
 from quadnav.errors import QuadnavError
+from quadnav.mission import flight_failure
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.settings import SimSettings

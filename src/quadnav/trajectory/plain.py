@@ -6,12 +6,15 @@ flat outputs (``rotorpy/trajectories/traj_template.py``), named where it is
 
 * Naming: :func:`load_trajectory_class` reads the spec (a list of numbers in its arguments
   arrives as a numpy array, :func:`~quadnav.plugins.literal_arrays`) and checks that the
-  class can be built with them (and with ``points`` when it is built from a path) and
-  has ``update``: else one line, exit 2.
-* Building: :meth:`TrajectoryClass.build` makes it; with a path, as ``fly`` does, the path
-  (N, 3) m is given as ``points`` when the constructor has such a parameter and the spec
-  does not set it (rotorpy's ``MinSnap(points, ...)``); otherwise from the spec's arguments
-  alone.
+  class can be built with them (and with what a mission gives it, when a mission builds
+  it) and has ``update``: else one line, exit 2.
+* Building: :meth:`TrajectoryClass.build` makes it; in a mission, as ``fly`` does, the
+  path (N, 3) m is given as ``points`` when the constructor has such a parameter and the
+  spec does not set it (rotorpy's ``MinSnap(points, ...)``), and likewise the real map as
+  ``world`` and the start and goal (3,) m as ``start`` and ``goal``, so that a class that
+  plans for itself flies too (MEAM620's ``WorldTraj(world, start, goal)``; quadnav's
+  planner still runs first, and its path is the one drawn); otherwise from the spec's
+  arguments alone.
 * Sampling: :func:`flat_reference` calls ``update(t)`` at every ``k dt`` (the control
   interval) and at the end. Of rotorpy's flat outputs quadnav flies ``x``, ``x_dot``,
   ``x_ddot`` ((3,) m, m/s, m/s^2, world frame, z up), ``yaw`` and ``yaw_dot`` (rad,
@@ -69,6 +72,11 @@ FLOWN = (*VECTORS, *SCALARS)
 _COLUMNS = {"x": slice(0, 3), "x_dot": slice(3, 6), "x_ddot": slice(6, 9),
             "yaw": slice(9, 10), "yaw_dot": slice(10, 11)}
 KIND = "reference"
+#: What a mission gives a trajectory class it builds, by keyword, when its constructor has
+#: such a parameter and the spec leaves it out: the planned path (N, 3) m, and the real map
+#: (:class:`~quadnav.world.model.World`), start and goal (3,) m, for a class that plans for
+#: itself (MEAM620's ``WorldTraj(world, start, goal)``).
+MISSION_ARGUMENTS = ("points", "world", "start", "goal")
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,19 +122,26 @@ class TrajectoryClass:
     kwargs: Mapping[str, Any]
 
     @property
-    def takes_points(self) -> bool:
-        """Whether a path is given to it as ``points``: it has such a parameter and the
-        spec leaves it out."""
-        return "points" not in self.kwargs and takes_keyword(self.factory, "points")
+    def mission_arguments(self) -> tuple[str, ...]:
+        """Which of :data:`MISSION_ARGUMENTS` a mission gives it: those its constructor
+        has a parameter for and the spec leaves out."""
+        return tuple(name for name in MISSION_ARGUMENTS
+                     if name not in self.kwargs and takes_keyword(self.factory, name))
 
-    def build(self, points: ArrayLike | None = None) -> Any:
-        """The trajectory object, built with the spec's arguments and, when given and
-        :attr:`takes_points`, ``points`` (N, 3) m. A :class:`~quadnav.plugins.PluginError`
-        (exit 1) with the class's traceback when building it raises; QuadnavError when what
-        it builds has no ``update``."""
-        kwargs = dict(self.kwargs)
-        if points is not None and self.takes_points:
-            kwargs["points"] = np.array(points, dtype=np.float64).reshape(-1, 3)
+    def build(self, points: ArrayLike | None = None, world: World | None = None,
+              start: ArrayLike | None = None, goal: ArrayLike | None = None) -> Any:
+        """The trajectory object, built with the spec's arguments and, of those given,
+        the :attr:`mission_arguments`: ``points`` (N, 3) m, ``world`` (the real map),
+        ``start`` and ``goal`` (3,) m. A :class:`~quadnav.plugins.PluginError` (exit 1) with
+        the class's traceback when building it raises; QuadnavError when what it builds
+        has no ``update``."""
+        given = {"points": None if points is None else
+                 np.array(points, dtype=np.float64).reshape(-1, 3),
+                 "world": world,
+                 "start": None if start is None else np.array(start, dtype=np.float64),
+                 "goal": None if goal is None else np.array(goal, dtype=np.float64)}
+        kwargs = dict(self.kwargs) | {name: given[name] for name in self.mission_arguments
+                                      if given[name] is not None}
         try:
             built = self.factory(**kwargs)
         except Exception as error:
@@ -148,9 +163,9 @@ def is_trajectory_class(text: str) -> bool:
 
 def load_trajectory_class(text: str, with_points: bool = False) -> TrajectoryClass:
     """The class ``text`` names (see the module docstring); ``with_points``: it will be
-    built from a path. QuadnavError (exit 2) for a spec that is not ``module:Class`` or
-    ``file.py:Class``, a class that cannot be found or loaded, cannot take the arguments,
-    or has no ``update``."""
+    built by a mission (:data:`MISSION_ARGUMENTS`). QuadnavError (exit 2) for a spec that
+    is not ``module:Class`` or ``file.py:Class``, a class that cannot be found or loaded,
+    cannot take the arguments, or has no ``update``."""
     spec = parse_spec(text, KIND)
     if not spec.is_located:
         raise QuadnavError(f"{KIND} {text!r}: expected a trajectory class, module:Class or "
@@ -163,7 +178,7 @@ def load_trajectory_class(text: str, with_points: bool = False) -> TrajectoryCla
     if isinstance(factory, type) and not callable(getattr(factory, "update", None)):
         raise QuadnavError(f"{KIND} {text}: {factory.__name__} has no update(t) method")
     chosen = TrajectoryClass(text, factory, literal_arrays(spec.kwargs))
-    given = dict(chosen.kwargs) | ({"points": None} if with_points and chosen.takes_points
+    given = dict(chosen.kwargs) | (dict.fromkeys(chosen.mission_arguments) if with_points
                                    else {})
     check_call(KIND, text, factory, (), given)
     return chosen
