@@ -38,7 +38,7 @@ def test_a_long_unknown_keyword_is_cut():
     assert message.startswith("m.txt:2: unknown keyword 'xxxxxxxxxxxx...xxxx (5,000 characters)'")
 
 
-@pytest.mark.parametrize("command", [["fly"], ["plan"], ["traj"], ["batch", "forest"],
+@pytest.mark.parametrize("command", [["fly"], ["plan"], ["traj"], ["batch", "forest"], ["grade", "DIR"],
                                      ["view", "DIR"], ["report", "DIR"], ["tune"]])
 @pytest.mark.parametrize("output", ["", "  "])
 def test_an_empty_output_path_is_refused_before_anything_is_written(tmp_path, command, output):

@@ -11,6 +11,7 @@ from typing import Any
 from quadnav.cli.args import (
     add_start_goal_arguments,
     number_in,
+    output_path,
     speed_or_max,
 )
 from quadnav.cli.commands import command_help
@@ -136,6 +137,6 @@ def add_grade_command(subparsers: argparse._SubParsersAction) -> None:
                    help="missions flown at once on local worker processes (default: 1, in "
                         "this process)")
     p.add_argument("--quiet", action="store_true", help="no line per mission")
-    p.add_argument("-o", "--output", default="grade", metavar="DIR",
+    p.add_argument("-o", "--output", type=output_path, default="grade", metavar="DIR",
                    help="folder to write into, created if needed (default: grade)")
     p.set_defaults(handler=grade)
