@@ -7,6 +7,11 @@ one line and exits with code 2.
 
 from __future__ import annotations
 
+import errno
+
+#: Errors of a write that found no room: no space, over quota, file too large.
+DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+
 
 class QuadnavError(Exception):
     """An error caused by the user's input; its message is one line for the user."""
@@ -25,6 +30,22 @@ class MapError(QuadnavError):
         self.reason = message
         where = self.source if line is None else f"{self.source}:{line}"
         super().__init__(f"{where}: {message}")
+
+
+class WriteError(QuadnavError):
+    """A file that could not be written: ``path`` and why (the system's words, e.g. "No
+    space left on device"), with ``full`` when there was no room for it."""
+
+    def __init__(self, path: object, reason: str, full: bool = False) -> None:
+        self.path = path
+        self.reason = reason
+        self.full = full
+        super().__init__(f"{path}: cannot write: {reason}")
+
+    @classmethod
+    def of(cls, path: object, error: OSError) -> WriteError:
+        """The error of a write of ``path`` that failed with ``error``."""
+        return cls(path, error.strerror or str(error), error.errno in DISK_FULL)
 
 
 class MapWarning(UserWarning):

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from quadnav.errors import QuadnavError
+from quadnav.errors import WriteError
 
 
 def _umask() -> int:
@@ -23,13 +23,13 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
 
     The file at ``path`` is therefore either the complete new file or untouched, and
     the temporary file is removed on failure. The new file gets the usual permissions
-    (0666 less the umask). An unwritable place is a one-line QuadnavError.
+    (0666 less the umask). An unwritable place is a one-line :class:`~quadnav.errors.WriteError`.
     """
     path = Path(path)
     try:
         fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     except OSError as error:
-        raise QuadnavError(f"{path}: cannot write: {error.strerror}") from None
+        raise WriteError.of(path, error) from None
     os.close(fd)
     tmp = Path(name)
     try:
@@ -37,6 +37,6 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         tmp.chmod(0o666 & ~_umask())
         os.replace(tmp, path)
     except OSError as error:
-        raise QuadnavError(f"{path}: cannot write: {error.strerror}") from None
+        raise WriteError.of(path, error) from None
     finally:
         tmp.unlink(missing_ok=True)

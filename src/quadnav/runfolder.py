@@ -29,7 +29,7 @@ from collections.abc import Collection
 from pathlib import Path
 from types import CodeType, FrameType, TracebackType
 
-from quadnav.errors import QuadnavError
+from quadnav.errors import DISK_FULL, QuadnavError, WriteError
 from quadnav.signals import STOP_SIGNALS
 
 #: Start of a staging folder's name; the process id and a random suffix follow.
@@ -261,7 +261,13 @@ class FolderReplacement:
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  traceback: TracebackType | None) -> None:
         self._gate.holding = True
-        self._finish(move=kind is None or (self.keep_partial and bool(_staged(self.staging))))
+        full = ((isinstance(error, OSError) and error.errno in DISK_FULL)
+                or (isinstance(error, WriteError) and error.full))
+        self._finish(move=kind is None or (self.keep_partial and not full
+                                           and bool(_staged(self.staging))))
+        if full:  # no room for the files: none was moved in, and the folder is named
+            reason = error.strerror if isinstance(error, OSError) else error.reason
+            raise WriteError(self.folder, reason, full=True) from None
 
     def _finish(self, move: bool) -> None:
         """Move the staged files in (if ``move``), remove the staging folder and the

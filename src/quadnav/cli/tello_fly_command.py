@@ -150,10 +150,12 @@ def tello_fly(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     # The log is written as the flight goes: whatever ends the flight (a safe stop, an
     # error, Ctrl-C, SIGTERM), the folder gets the new log and, if it was drawn, the figure.
+    # A dry run flies nothing: one that fails leaves the folder as it was.
     # The earlier run's folder files go with the new log: the run folder written next
     # (what report, view, animate and blender read) is never another flight's.
     host = None if args.dry_run else args.host
-    with replaced_folder(folder, (*TELLO_FILES, *RUN_FILES), keep_partial=True) as staging:
+    with replaced_folder(folder, (*TELLO_FILES, *RUN_FILES), keep_partial=host is not None
+                         ) as staging:
         flown = fly(plan, settings, staging, host=host, truth=args.truth)
     written = write_run(tello_run_content(plan, settings, flown, host), folder,
                         figures=not args.no_figures)
