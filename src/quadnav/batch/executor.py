@@ -16,6 +16,10 @@ made once with ``shared`` and ``warm_up(shared)`` run in its initializer (import
 compiled kernels). Workers ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 :meth:`~LocalExecutor.close` with ``cancel`` ends the workers at once.
 
+Each worker runs its numba kernels on the threads :func:`~quadnav.batch.threads.numba_threads`
+gives (one per worker unless a single local worker has the machine), set in the worker
+before its first job (``threads`` of :func:`open_executor` sets another count).
+
 Ray (:class:`RayExecutor`, the optional ``quadnav[ray]``; imported only here, only when
 asked for): ``ray.init(address=...)``, or a local Ray started for the run without an
 address; ``shared`` goes to the object store once (``ray.put``) and each worker process
@@ -35,6 +39,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from types import TracebackType
 from typing import Any, Protocol
 
+from quadnav.batch.threads import numba_threads, use_numba_threads
 from quadnav.errors import QuadnavError
 from quadnav.signals import STOP_SIGNALS
 
@@ -56,6 +61,8 @@ class Executor(Protocol):
     """What :func:`open_executor` returns."""
 
     workers: int
+    #: numba threads of each worker process
+    numba_threads: int
 
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
@@ -86,11 +93,13 @@ class _Closing:
 _shared: Any = None
 
 
-def _start_worker(shared: Any, warm_up: WarmUp | None) -> None:
-    """Initializer of a local worker: ignore stop signals, keep ``shared``, warm up."""
+def _start_worker(shared: Any, warm_up: WarmUp | None, threads: int) -> None:
+    """Initializer of a local worker: ignore stop signals, set numba's ``threads``, keep
+    ``shared``, warm up."""
     global _shared
     for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
+    use_numba_threads(threads)
     _shared = shared
     if warm_up is not None:
         warm_up(shared)
@@ -104,11 +113,12 @@ class LocalExecutor(_Closing):
     """Jobs on ``workers`` local processes (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
-                 workers: int | None = None) -> None:
+                 workers: int | None = None, threads: int | None = None) -> None:
         self.workers = workers or cpu_count()
+        self.numba_threads = threads or numba_threads(self.workers)
         self._pool = ProcessPoolExecutor(
             self.workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_start_worker, initargs=(shared, warm_up))
+            initializer=_start_worker, initargs=(shared, warm_up, self.numba_threads))
 
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
@@ -137,11 +147,13 @@ class LocalExecutor(_Closing):
 _ray_shared: dict[str, Any] = {}
 
 
-def _ray_job(function: Job, shared_ref: list, warm_up: WarmUp | None, item: Any) -> Any:
-    """A Ray task: ``function(shared, item)``, with ``shared`` read from the object store
-    (and ``warm_up`` run) once per worker process."""
+def _ray_job(function: Job, shared_ref: list, warm_up: WarmUp | None, threads: int,
+             item: Any) -> Any:
+    """A Ray task: ``function(shared, item)`` on numba's ``threads``, with ``shared`` read
+    from the object store (and ``warm_up`` run) once per worker process."""
     import ray
 
+    use_numba_threads(threads)  # on the thread that runs the task, before the job
     ref = shared_ref[0]  # in a list, so that Ray passes the reference, not the value
     if ref.hex() not in _ray_shared:
         _ray_shared.clear()
@@ -184,7 +196,8 @@ class RayExecutor(_Closing):
     CPUs started for the run when ``address`` is None (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
-                 address: str | None = None, workers: int | None = None) -> None:
+                 address: str | None = None, workers: int | None = None,
+                 threads: int | None = None) -> None:
         ray = self._ray = _import_ray()
         options: dict[str, Any] = {"logging_level": logging.WARNING, "log_to_driver": False,
                                    "configure_logging": True}
@@ -199,6 +212,7 @@ class RayExecutor(_Closing):
             raise QuadnavError(f"cannot connect to the Ray cluster at {address}: "
                                f"{first_line}") from None
         self.workers = int(ray.cluster_resources().get("CPU", 1))
+        self.numba_threads = threads or numba_threads(self.workers, ray=True)
         self._shared = [ray.put(shared)]
         self._warm_up = warm_up
         self._task = ray.remote(num_cpus=1)(_ray_job)
@@ -207,7 +221,8 @@ class RayExecutor(_Closing):
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
         ray = self._ray
-        self._pending = {self._task.remote(function, self._shared, self._warm_up, item): index
+        self._pending = {self._task.remote(function, self._shared, self._warm_up,
+                                           self.numba_threads, item): index
                          for index, item in enumerate(items)}
         while self._pending:
             done, _ = ray.wait(list(self._pending), num_returns=1)
@@ -224,10 +239,12 @@ class RayExecutor(_Closing):
 
 
 def open_executor(shared: Any, warm_up: WarmUp | None = None, workers: int | None = None,
-                  ray: bool = False, address: str | None = None) -> Executor:
+                  ray: bool = False, address: str | None = None,
+                  threads: int | None = None) -> Executor:
     """Local worker processes (``workers``, default: one per CPU), or with ``ray`` a Ray
-    cluster at ``address`` (None: a local Ray of ``workers`` CPUs). QuadnavError when Ray is
-    asked for but not installed or the cluster cannot be reached."""
+    cluster at ``address`` (None: a local Ray of ``workers`` CPUs), each worker running
+    numba on ``threads`` (default: :func:`~quadnav.batch.threads.numba_threads`). QuadnavError
+    when Ray is asked for but not installed or the cluster cannot be reached."""
     if ray:
-        return RayExecutor(shared, warm_up, address, workers)
-    return LocalExecutor(shared, warm_up, workers)
+        return RayExecutor(shared, warm_up, address, workers, threads)
+    return LocalExecutor(shared, warm_up, workers, threads)
