@@ -34,8 +34,10 @@ import multiprocessing
 import os
 import signal
 import socket
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from types import TracebackType
 from typing import Any, Protocol
 
@@ -191,6 +193,62 @@ def check_reachable(address: str) -> None:
                            "start it with ray start --head") from None
 
 
+#: Where a client finds a Ray cluster's token (Ray's token authentication).
+TOKEN_PLACES = ("the cluster's token (ray get-auth-token on the head prints it) in "
+                "RAY_AUTH_TOKEN, ~/.ray/auth_token or a file that RAY_AUTH_TOKEN_PATH names")
+
+
+@contextmanager
+def _stderr_dropped() -> Iterator[None]:
+    """Drop what is written on file descriptor 2 in the block (Ray's C++ warnings)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with open(os.devnull, "wb") as null:
+        os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def check_authenticated(address: str) -> None:
+    """QuadnavError at once unless the Ray cluster's head at ``address`` (``HOST:PORT``,
+    reachable) takes this client's authentication token, or asks for none (``auto`` and
+    ``ray://`` addresses are left to Ray).
+
+    A head started by ``ray start --head`` where a token is found (Ray's token
+    authentication) refuses a client without it; ``ray.init`` would then retry for about
+    20 s and say only that it failed to connect, the cause left in Ray's warnings.
+    Nothing is checked with a Ray without token authentication.
+    """
+    try:
+        from ray._private.authentication.authentication_token_setup import (
+            ensure_token_if_auth_enabled,
+        )
+        from ray._raylet import GcsClient
+        from ray.exceptions import AuthenticationError
+    except ImportError:  # a Ray before token authentication
+        return
+    if address == "auto" or address.startswith("ray://"):
+        return
+    token_mode = os.environ.get("RAY_AUTH_MODE", "").lower() == "token"
+    try:
+        ensure_token_if_auth_enabled(None, create_token_if_missing=False)
+    except AuthenticationError:
+        raise QuadnavError(f"--ray {address}: RAY_AUTH_MODE is token but no authentication "
+                           f"token was found: put {TOKEN_PLACES}") from None
+    try:
+        with _stderr_dropped():  # Ray warns of the refusal in a line of its own
+            GcsClient(address=address)  # asks the head for the cluster's id
+    except AuthenticationError:
+        problem = ("the Ray cluster refused this client's authentication token (not the "
+                   "cluster's): put " if token_mode else "the Ray cluster asks for an "
+                   "authentication token and RAY_AUTH_MODE is not token here: set "
+                   "RAY_AUTH_MODE=token and put ")
+        raise QuadnavError(f"--ray {address}: {problem}{TOKEN_PLACES}") from None
+
+
 class RayExecutor(_Closing):
     """Jobs as Ray tasks on the cluster at ``address``, or on a local Ray of ``workers``
     CPUs started for the run when ``address`` is None (see the module docstring)."""
@@ -205,9 +263,10 @@ class RayExecutor(_Closing):
             options |= {"num_cpus": workers or cpu_count(), "include_dashboard": False}
         else:
             check_reachable(address)
+            check_authenticated(address)
         try:
             ray.init(address=address, **options)
-        except (ConnectionError, RuntimeError, ValueError) as error:
+        except (ConnectionError, RuntimeError, ValueError, ray.exceptions.RayError) as error:
             first_line = str(error).strip().splitlines()[0] if str(error).strip() else ""
             raise QuadnavError(f"cannot connect to the Ray cluster at {address}: "
                                f"{first_line}") from None
