@@ -1,7 +1,8 @@
 """``--ray`` on a real Ray cluster on this machine, set up as current Ray sets one up: a
-head with token authentication on, a ``ray start`` of its own (tests/raycluster.py; one
-cluster for the module). A client without the cluster's token gets one line at once,
-saying so; with it, the cluster's tasks run numba on one thread."""
+head with token authentication on and a second node, each a ``ray start`` of its own
+(tests/raycluster.py; one cluster for the module). A client without the cluster's token
+gets one line at once, saying so; with it, a batch runs across both nodes and gives the
+table of the missions flown one by one here, row for row."""
 
 from __future__ import annotations
 
@@ -11,8 +12,11 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from batchtools import MISSIONS, rows_one_by_one, write_spec
 from clitools import assert_user_error
 from raycluster import client_environment, ray_cluster
+
+from quadnav.batch.table import read_rows, same_row
 
 ray = pytest.importorskip("ray", reason="Ray is an optional extra: pip install 'quadnav[ray]'")
 pytest.importorskip("ray._private.authentication",
@@ -25,7 +29,7 @@ COMMAND_TIMEOUT = 300
 @pytest.fixture(scope="module")
 def cluster() -> Iterator[tuple[str, str, Path]]:
     """The head's address, the cluster's token and the folder of the nodes."""
-    with ray_cluster() as started:
+    with ray_cluster(nodes=2) as started:
         yield started
 
 
@@ -56,6 +60,29 @@ def test_a_client_without_the_clusters_token_gets_one_line_saying_so(
     assert_user_error(result, f"--ray {address}: {problem}", "RAY_AUTH_TOKEN",
                       "~/.ray/auth_token", "RAY_AUTH_TOKEN_PATH", "ray get-auth-token")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_batch_across_two_nodes_gives_the_table_of_the_missions_flown_here(
+        cluster, tmp_path):
+    address, token, folder = cluster
+    spec = write_spec(tmp_path / "spec")
+
+    result = quadnav(tmp_path, "batch", spec, "--ray", address, "--quiet", "-o",
+                     tmp_path / "out", RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=token)
+
+    assert result.returncode == 0, result.stderr
+    assert f"flying {MISSIONS} on 2 CPUs of the Ray cluster at {address} x 1 numba thread" \
+        in result.stdout
+    rows = read_rows(tmp_path / "out" / "results.csv")
+    assert len(rows) == MISSIONS
+    assert all(same_row(a, b) for a, b in zip(rows, rows_one_by_one(spec), strict=True))
+    # each node's workers name every task they ran in their log (Ray's own marker)
+    marker = ray._private.ray_constants.LOG_PREFIX_TASK_NAME + "_ray_job"
+    ran = {node: sum(log.read_text().splitlines().count(marker)
+                     for log in (folder / node).glob("ray/session_latest/logs/worker-*.out"))
+           for node in ("head", "node1")}
+    assert ran["head"] >= 1 and ran["node1"] >= 1, ran
+    assert sum(ran.values()) == MISSIONS
 
 
 def test_each_ray_task_runs_numba_on_one_thread(cluster, tmp_path):
