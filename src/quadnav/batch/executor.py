@@ -179,14 +179,20 @@ def _import_ray():
 CONNECT_TIMEOUT = 10.0
 
 
+def _host_and_port(address: str) -> tuple[str, int] | None:
+    """The host and port of a ``[ray://]HOST:PORT`` address; None for another (``auto``)."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    return (host.strip("[]"), int(port)) if host and port.isdigit() else None
+
+
 def check_reachable(address: str) -> None:
     """QuadnavError unless something answers at the ``HOST:PORT`` of ``address`` (a
     ``ray://`` prefix allowed; ``auto`` and addresses without a port are left to Ray)."""
-    host, _, port = address.removeprefix("ray://").rpartition(":")
-    if not host or not port.isdigit():
+    host_and_port = _host_and_port(address)
+    if host_and_port is None:
         return
     try:
-        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+        socket.create_connection(host_and_port, CONNECT_TIMEOUT).close()
     except OSError as error:
         reason = error.strerror or str(error) or type(error).__name__
         raise QuadnavError(f"--ray {address}: cannot reach the Ray cluster's head: {reason}; "
@@ -214,23 +220,24 @@ def _stderr_dropped() -> Iterator[None]:
 
 def check_authenticated(address: str) -> None:
     """QuadnavError at once unless the Ray cluster's head at ``address`` (``HOST:PORT``,
-    reachable) takes this client's authentication token, or asks for none (``auto`` and
-    ``ray://`` addresses are left to Ray).
+    reachable) takes this client's authentication token, or asks for none (other
+    addresses, ``auto`` or ``ray://...``, are left to Ray).
 
     A head started by ``ray start --head`` where a token is found (Ray's token
     authentication) refuses a client without it; ``ray.init`` would then retry for about
-    20 s and say only that it failed to connect, the cause left in Ray's warnings.
-    Nothing is checked with a Ray without token authentication.
+    20 s and say only that it failed to connect, the cause left in Ray's warnings. Also
+    QuadnavError when what answers is no Ray head. Nothing is checked with a Ray without
+    token authentication.
     """
     try:
         from ray._private.authentication.authentication_token_setup import (
             ensure_token_if_auth_enabled,
         )
         from ray._raylet import GcsClient
-        from ray.exceptions import AuthenticationError
+        from ray.exceptions import AuthenticationError, RayError
     except ImportError:  # a Ray before token authentication
         return
-    if address == "auto" or address.startswith("ray://"):
+    if address.startswith("ray://") or _host_and_port(address) is None:
         return
     token_mode = os.environ.get("RAY_AUTH_MODE", "").lower() == "token"
     try:
@@ -247,6 +254,9 @@ def check_authenticated(address: str) -> None:
                    "authentication token and RAY_AUTH_MODE is not token here: set "
                    "RAY_AUTH_MODE=token and put ")
         raise QuadnavError(f"--ray {address}: {problem}{TOKEN_PLACES}") from None
+    except RayError as error:  # something else answers there (after about 40 s)
+        raise QuadnavError(f"--ray {address}: no Ray cluster's head answers there: "
+                           f"{str(error).strip().splitlines()[0]}") from None
 
 
 class RayExecutor(_Closing):
