@@ -7,6 +7,8 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+import numba
+
 from quadnav.batch.fly_one import fly_row, load_context
 from quadnav.batch.grid import read_spec
 
@@ -40,3 +42,8 @@ def rows_one_by_one(spec_path: Path) -> list[dict]:
     """The rows of the spec's missions flown in this process, one after the other."""
     return list(_rows_one_by_one(str(spec_path)))
 
+
+
+def numba_threads_in_worker(shared: object, item: object) -> int:
+    """A job for an executor: the numba threads its worker's kernels run on."""
+    return numba.get_num_threads()

@@ -16,6 +16,10 @@ made once with ``shared`` and ``warm_up(shared)`` run in its initializer (import
 compiled kernels). Workers ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 :meth:`~LocalExecutor.close` with ``cancel`` ends the workers at once.
 
+Each worker runs its numba kernels on the threads :func:`~quadnav.batch.threads.numba_threads`
+gives (one per worker unless a single local worker has the machine), set in the worker
+before its first job (``threads`` of :func:`open_executor` sets another count).
+
 Ray (:class:`RayExecutor`, the optional ``quadnav[ray]``; imported only here, only when
 asked for): ``ray.init(address=...)``, or a local Ray started for the run without an
 address; ``shared`` goes to the object store once (``ray.put``) and each worker process
@@ -30,11 +34,14 @@ import multiprocessing
 import os
 import signal
 import socket
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from types import TracebackType
 from typing import Any, Protocol
 
+from quadnav.batch.threads import numba_threads, use_numba_threads
 from quadnav.errors import QuadnavError
 from quadnav.signals import STOP_SIGNALS
 
@@ -56,6 +63,8 @@ class Executor(Protocol):
     """What :func:`open_executor` returns."""
 
     workers: int
+    #: numba threads of each worker process
+    numba_threads: int
 
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
@@ -86,11 +95,13 @@ class _Closing:
 _shared: Any = None
 
 
-def _start_worker(shared: Any, warm_up: WarmUp | None) -> None:
-    """Initializer of a local worker: ignore stop signals, keep ``shared``, warm up."""
+def _start_worker(shared: Any, warm_up: WarmUp | None, threads: int) -> None:
+    """Initializer of a local worker: ignore stop signals, set numba's ``threads``, keep
+    ``shared``, warm up."""
     global _shared
     for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
+    use_numba_threads(threads)
     _shared = shared
     if warm_up is not None:
         warm_up(shared)
@@ -104,11 +115,12 @@ class LocalExecutor(_Closing):
     """Jobs on ``workers`` local processes (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
-                 workers: int | None = None) -> None:
+                 workers: int | None = None, threads: int | None = None) -> None:
         self.workers = workers or cpu_count()
+        self.numba_threads = threads or numba_threads(self.workers)
         self._pool = ProcessPoolExecutor(
             self.workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_start_worker, initargs=(shared, warm_up))
+            initializer=_start_worker, initargs=(shared, warm_up, self.numba_threads))
 
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
@@ -137,11 +149,13 @@ class LocalExecutor(_Closing):
 _ray_shared: dict[str, Any] = {}
 
 
-def _ray_job(function: Job, shared_ref: list, warm_up: WarmUp | None, item: Any) -> Any:
-    """A Ray task: ``function(shared, item)``, with ``shared`` read from the object store
-    (and ``warm_up`` run) once per worker process."""
+def _ray_job(function: Job, shared_ref: list, warm_up: WarmUp | None, threads: int,
+             item: Any) -> Any:
+    """A Ray task: ``function(shared, item)`` on numba's ``threads``, with ``shared`` read
+    from the object store (and ``warm_up`` run) once per worker process."""
     import ray
 
+    use_numba_threads(threads)  # on the thread that runs the task, before the job
     ref = shared_ref[0]  # in a list, so that Ray passes the reference, not the value
     if ref.hex() not in _ray_shared:
         _ray_shared.clear()
@@ -165,18 +179,84 @@ def _import_ray():
 CONNECT_TIMEOUT = 10.0
 
 
+def _host_and_port(address: str) -> tuple[str, int] | None:
+    """The host and port of a ``[ray://]HOST:PORT`` address; None for another (``auto``)."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    return (host.strip("[]"), int(port)) if host and port.isdigit() else None
+
+
 def check_reachable(address: str) -> None:
     """QuadnavError unless something answers at the ``HOST:PORT`` of ``address`` (a
     ``ray://`` prefix allowed; ``auto`` and addresses without a port are left to Ray)."""
-    host, _, port = address.removeprefix("ray://").rpartition(":")
-    if not host or not port.isdigit():
+    host_and_port = _host_and_port(address)
+    if host_and_port is None:
         return
     try:
-        socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT).close()
+        socket.create_connection(host_and_port, CONNECT_TIMEOUT).close()
     except OSError as error:
         reason = error.strerror or str(error) or type(error).__name__
         raise QuadnavError(f"--ray {address}: cannot reach the Ray cluster's head: {reason}; "
                            "start it with ray start --head") from None
+
+
+#: Where a client finds a Ray cluster's token (Ray's token authentication).
+TOKEN_PLACES = ("the cluster's token (ray get-auth-token on the head prints it) in "
+                "RAY_AUTH_TOKEN, ~/.ray/auth_token or a file that RAY_AUTH_TOKEN_PATH names")
+
+
+@contextmanager
+def _stderr_dropped() -> Iterator[None]:
+    """Drop what is written on file descriptor 2 in the block (Ray's C++ warnings)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with open(os.devnull, "wb") as null:
+        os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def check_authenticated(address: str) -> None:
+    """QuadnavError at once unless the Ray cluster's head at ``address`` (``HOST:PORT``,
+    reachable) takes this client's authentication token, or asks for none (other
+    addresses, ``auto`` or ``ray://...``, are left to Ray).
+
+    A head started by ``ray start --head`` where a token is found (Ray's token
+    authentication) refuses a client without it; ``ray.init`` would then retry for about
+    20 s and say only that it failed to connect, the cause left in Ray's warnings. Also
+    QuadnavError when what answers is no Ray head. Nothing is checked with a Ray without
+    token authentication.
+    """
+    try:
+        from ray._private.authentication.authentication_token_setup import (
+            ensure_token_if_auth_enabled,
+        )
+        from ray._raylet import GcsClient
+        from ray.exceptions import AuthenticationError, RayError
+    except ImportError:  # a Ray before token authentication
+        return
+    if address.startswith("ray://") or _host_and_port(address) is None:
+        return
+    token_mode = os.environ.get("RAY_AUTH_MODE", "").lower() == "token"
+    try:
+        ensure_token_if_auth_enabled(None, create_token_if_missing=False)
+    except AuthenticationError:
+        raise QuadnavError(f"--ray {address}: RAY_AUTH_MODE is token but no authentication "
+                           f"token was found: put {TOKEN_PLACES}") from None
+    try:
+        with _stderr_dropped():  # Ray warns of the refusal in a line of its own
+            GcsClient(address=address)  # asks the head for the cluster's id
+    except AuthenticationError:
+        problem = ("the Ray cluster refused this client's authentication token (not the "
+                   "cluster's): put " if token_mode else "the Ray cluster asks for an "
+                   "authentication token and RAY_AUTH_MODE is not token here: set "
+                   "RAY_AUTH_MODE=token and put ")
+        raise QuadnavError(f"--ray {address}: {problem}{TOKEN_PLACES}") from None
+    except RayError as error:  # something else answers there (after about 40 s)
+        raise QuadnavError(f"--ray {address}: no Ray cluster's head answers there: "
+                           f"{str(error).strip().splitlines()[0]}") from None
 
 
 class RayExecutor(_Closing):
@@ -184,7 +264,8 @@ class RayExecutor(_Closing):
     CPUs started for the run when ``address`` is None (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
-                 address: str | None = None, workers: int | None = None) -> None:
+                 address: str | None = None, workers: int | None = None,
+                 threads: int | None = None) -> None:
         ray = self._ray = _import_ray()
         options: dict[str, Any] = {"logging_level": logging.WARNING, "log_to_driver": False,
                                    "configure_logging": True}
@@ -192,13 +273,15 @@ class RayExecutor(_Closing):
             options |= {"num_cpus": workers or cpu_count(), "include_dashboard": False}
         else:
             check_reachable(address)
+            check_authenticated(address)
         try:
             ray.init(address=address, **options)
-        except (ConnectionError, RuntimeError, ValueError) as error:
+        except (ConnectionError, RuntimeError, ValueError, ray.exceptions.RayError) as error:
             first_line = str(error).strip().splitlines()[0] if str(error).strip() else ""
             raise QuadnavError(f"cannot connect to the Ray cluster at {address}: "
                                f"{first_line}") from None
         self.workers = int(ray.cluster_resources().get("CPU", 1))
+        self.numba_threads = threads or numba_threads(self.workers, ray=True)
         self._shared = [ray.put(shared)]
         self._warm_up = warm_up
         self._task = ray.remote(num_cpus=1)(_ray_job)
@@ -207,7 +290,8 @@ class RayExecutor(_Closing):
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
         ray = self._ray
-        self._pending = {self._task.remote(function, self._shared, self._warm_up, item): index
+        self._pending = {self._task.remote(function, self._shared, self._warm_up,
+                                           self.numba_threads, item): index
                          for index, item in enumerate(items)}
         while self._pending:
             done, _ = ray.wait(list(self._pending), num_returns=1)
@@ -224,10 +308,12 @@ class RayExecutor(_Closing):
 
 
 def open_executor(shared: Any, warm_up: WarmUp | None = None, workers: int | None = None,
-                  ray: bool = False, address: str | None = None) -> Executor:
+                  ray: bool = False, address: str | None = None,
+                  threads: int | None = None) -> Executor:
     """Local worker processes (``workers``, default: one per CPU), or with ``ray`` a Ray
-    cluster at ``address`` (None: a local Ray of ``workers`` CPUs). QuadnavError when Ray is
-    asked for but not installed or the cluster cannot be reached."""
+    cluster at ``address`` (None: a local Ray of ``workers`` CPUs), each worker running
+    numba on ``threads`` (default: :func:`~quadnav.batch.threads.numba_threads`). QuadnavError
+    when Ray is asked for but not installed or the cluster cannot be reached."""
     if ray:
-        return RayExecutor(shared, warm_up, address, workers)
-    return LocalExecutor(shared, warm_up, workers)
+        return RayExecutor(shared, warm_up, address, workers, threads)
+    return LocalExecutor(shared, warm_up, workers, threads)

@@ -108,11 +108,13 @@ def ordered_rows(missions: Sequence[MissionSpec], rows: dict[str, dict[str, Any]
     return [rows[m.key] for m in missions if m.key in rows]
 
 
-def write_outputs(folder: Path, rows: list[dict[str, Any]], expected: int) -> list[str]:
+def write_outputs(folder: Path, rows: list[dict[str, Any]], expected: int,
+                  ran_on: dict[str, int] | None = None) -> list[str]:
     """Write the tables, ``summary.json`` and ``summary.html`` of ``rows`` (``expected``:
-    the batch's size); returns the file names written."""
+    the batch's size; ``ran_on``: see :func:`~.summary.summary`); returns the file names
+    written."""
     written = write_tables(rows, folder)
-    content = summary(rows, expected)
+    content = summary(rows, expected, ran_on)
     write_summary(content, folder / SUMMARY_JSON)
     write_summary_page(content, rows, folder)
     return [*written, SUMMARY_JSON, SUMMARY_HTML]

@@ -50,7 +50,7 @@ class BatchRun:
         self.todo = [m for m in self.missions if m.key not in self.rows]
 
     def run(self, workers: int | None = None, ray: bool = False, address: str | None = None,
-            on_start: Callable[[int], None] | None = None,
+            on_start: Callable[[int, int], None] | None = None,
             on_row: Callable[[dict[str, Any]], None] | None = None) -> list[str]:
         """Fly the missions still to fly and write the outputs; returns the names written.
 
@@ -59,24 +59,27 @@ class BatchRun:
                 Ray.
             ray: run on Ray, at ``address`` (None: a local Ray started for the run).
             address: a Ray cluster's address.
-            on_start: called with the number of workers once they are ready.
+            on_start: called with the number of workers and the numba threads of each
+                once they are ready.
             on_row: called with each row as it is journaled.
 
         A stop (KeyboardInterrupt) or error still writes the outputs from the rows finished,
         then goes on.
         """
         executor = None
+        ran_on = None
         if self.todo:
             executor = open_executor(self.context, warm_up,
                                      min(workers, len(self.todo)) if workers else None,
                                      ray, address)
+            ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
             begin(self.folder, self.record, self.restart)
             journal = Journal(self.folder / RESULTS_CSV)
             try:
                 if executor is not None:
                     if on_start is not None:
-                        on_start(executor.workers)
+                        on_start(executor.workers, executor.numba_threads)
                     for _, row in executor.map_unordered(fly_row, self.todo):
                         journal.append(row)
                         self.rows[row["mission_key"]] = row
@@ -89,7 +92,8 @@ class BatchRun:
                 raise
             finally:
                 journal.close()
-                written = write_outputs(self.folder, self.finished, len(self.missions))
+                written = write_outputs(self.folder, self.finished, len(self.missions),
+                                        ran_on)
         finally:
             if executor is not None:
                 executor.close()

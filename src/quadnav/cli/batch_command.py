@@ -78,11 +78,11 @@ class _Progress:
         self.quiet = quiet
         self.bar: tqdm | None = None
 
-    def started(self, workers: int) -> None:
+    def started(self, workers: int, threads: int) -> None:
         run = self.run
         print(f"{len(run.missions)} missions, {len(run.rows)} already in {run.folder}; flying "
-              f"{len(run.todo)} on {workers} {self.where.format(s='s' if workers > 1 else '')}",
-              flush=True)
+              f"{len(run.todo)} on {workers} {self.where.format(s='s' if workers > 1 else '')}"
+              f" x {threads} numba thread{'s' if threads > 1 else ''}", flush=True)
         self.bar = terminal_bar(self.quiet, total=len(run.todo), desc="batch", unit="mission",
                                 dynamic_ncols=True)
 
