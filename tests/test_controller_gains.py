@@ -24,6 +24,8 @@ from quadnav.control.sampling import axis_loops
 from quadnav.control.se3 import SE3Gains
 from quadnav.errors import QuadnavError
 from quadnav.mission import MissionSettings
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
 from quadnav.trajectory.references import load_reference
 from quadnav.vehicle.params import load_params
@@ -46,6 +48,22 @@ def test_the_library_flies_a_vehicle_with_its_own_gains():
     # and so do the other entries of the library: a tracking and its parameters
     tracking = track_reference(load_reference("hover:duration=0.5"), RBE595)
     assert tracking.parameters()["gains"] == as_plain(load_gains(preset="rbe595"))
+
+
+def test_simulate_flies_the_vehicle_with_its_own_gains_when_given_none():
+    # on main, simulate(reference, rbe595) with no gains and no controller flew the cascade's
+    # defaults, the Tello's; it flies the gains tuned for the vehicle the controller knows
+    step = load_reference("step:axis=x,size=0.5,duration=1.5")
+    fast = SimSettings(control_rate=500.0, settle_time=0.0)
+    own = simulate(step, RBE595, settings=fast)
+    tuned = simulate(step, RBE595, controller_gains("cascade", RBE595), settings=fast)
+    tellos = simulate(step, RBE595, Gains(), settings=fast)
+    assert np.array_equal(own.states, tuned.states)
+    assert not np.allclose(own.states, tellos.states, atol=1e-3)
+    # a plant flown by a controller that knows another vehicle: that vehicle's gains
+    known = simulate(step, TELLO, settings=fast, model=RBE595)
+    assert np.array_equal(known.states, simulate(step, TELLO, controller_gains(
+        "cascade", RBE595), settings=fast, model=RBE595).states)
 
 
 def test_each_controller_builds_from_the_vehicle_and_its_own_gains():
