@@ -32,6 +32,10 @@ class PDAttitude:
     """Thrust and attitude from a PD law on the position error, gains in 1/s^2 and 1/s,
     plus the drag of the four rotors (rotorpy's ``k_d``, ``k_z``) at the hover speed."""
 
+    # what update returns (else found from its first call); declared, the control rate is
+    # checked against the attitude and rate loops that fly it before the flight
+    control_abstraction = "cmd_ctatt"
+
     def __init__(self, quad_params, kp=6.5, kd=4.0):
         self.mass, self.kp, self.kd = quad_params["mass"], kp, kd
         hover = np.sqrt(self.mass * GRAVITY[2] / 4 / quad_params["k_eta"])  # rad/s
