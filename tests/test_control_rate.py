@@ -11,7 +11,7 @@ import pytest
 from clitools import assert_user_error, run_here
 from scipy.linalg import expm
 
-from quadnav.control.gains import course_gain_names, load_gains
+from quadnav.control.gains import course_gain_names
 from quadnav.control.registry import (
     CONTROLLERS,
     check_controller_rate,
@@ -139,7 +139,8 @@ def test_gains_unstable_at_any_rate_are_refused(tmp_path):
                      "ki = [40.0, 40.0, 5.0]\nkd = [0.0, 0.0, 0.0]\n")
     with pytest.raises(QuadnavError, match="roll loop on the tello vehicle is unstable at any "
                                            "control rate: its gains cannot fly"):
-        check_control_rate(make_controller("cascade", TELLO, load_gains(gains)), TELLO, 1000.0)
+        check_control_rate(make_controller("cascade", TELLO, controller_gains(
+            "cascade", TELLO, gains)), TELLO, 1000.0)
 
 
 def test_another_controller_is_not_checked():
