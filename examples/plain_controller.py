@@ -11,7 +11,12 @@ holds ``x``, ``x_dot``, ``x_ddot``, ``x_dddot``, ``x_ddddot``, ``yaw``, ``yaw_do
 ``cmd_moment`` (N m), ``cmd_q`` or ``cmd_w`` (rad/s), or ``cmd_v`` (m/s). Use this file as a
 template; the command line flies it too::
 
-    quadnav fly --controller "examples/plain_controller.py:PDAttitude(kp=6.5, kd=4.0)"
+    quadnav fly --controller "examples/plain_controller.py:PDAttitude(kp=6.5, kd=4.0)" \
+        --control-rate 250
+
+Python runs at every control step, so it flies at 250 Hz, a quarter of the default 1 kHz's
+calls (the physics stays at 1 kHz; the control rate is checked against the attitude and rate
+loops that fly its commands).
 
 Run: python examples/plain_controller.py [MAP]   (a map with its own start and goal;
 default: the built-in forest)
@@ -23,6 +28,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from quadnav.mission import MissionSettings, fly_mission
+from quadnav.sim.settings import SimSettings
 from quadnav.world import load_world
 
 GRAVITY = np.array([0.0, 0.0, 9.81])  # m/s^2, what the thrust holds up
@@ -31,6 +37,10 @@ GRAVITY = np.array([0.0, 0.0, 9.81])  # m/s^2, what the thrust holds up
 class PDAttitude:
     """Thrust and attitude from a PD law on the position error, gains in 1/s^2 and 1/s,
     plus the drag of the four rotors (rotorpy's ``k_d``, ``k_z``) at the hover speed."""
+
+    # what update returns (else found from its first call); declared, the control rate is
+    # checked against the attitude and rate loops that fly it before the flight
+    control_abstraction = "cmd_ctatt"
 
     def __init__(self, quad_params, kp=6.5, kd=4.0):
         self.mass, self.kp, self.kd = quad_params["mass"], kp, kd
@@ -52,7 +62,8 @@ class PDAttitude:
 
 if __name__ == "__main__":
     name = sys.argv[1] if len(sys.argv) > 1 else "forest"
-    settings = MissionSettings(controller=f"{__file__}:PDAttitude(kp=6.5, kd=4.0)")
+    settings = MissionSettings(controller=f"{__file__}:PDAttitude(kp=6.5, kd=4.0)",
+                               sim=SimSettings(control_rate=250.0))
     mission = fly_mission(load_world(name), settings=settings)  # its own start and goal
     flight = mission.flight
     print(f"PD attitude in {name}: success {mission.success}, RMS tracking error "

@@ -25,13 +25,16 @@ SHARED_MAPS = Path(__file__).resolve().parents[2] / "shared" / "maps"
 
 #: Commands that compile (or load from numba's cache) the kernels most tests share, in two
 #: chains run side by side: planning, refinement and the trajectory stage; the closed loop
-#: with each controller (the loop is compiled once per controller).
+#: with each controller (the loop is compiled once per controller), and the step every
+#: plain-Python controller flies by.
 WARM_UP = (
     (("plan", "--first", "--quiet", "-o", "{tmp}/plan"),
      ("traj", "forest", "--path", "{tmp}/plan/path.csv", "-o", "{tmp}/plan")),
     (("track", "hover:duration=1", "--no-figures", "--quiet", "-o", "{tmp}/track"),
      ("track", "hover:duration=1", "--controller", "se3", "--no-figures", "--quiet", "-o",
-      "{tmp}/se3")),
+      "{tmp}/se3"),
+     ("track", "hover:duration=1", "--controller", "quadnav.cli.precompile:Follow",
+      "--no-figures", "--quiet", "-o", "{tmp}/plain")),
 )
 
 

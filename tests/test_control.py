@@ -5,13 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadnav.control.gains import (
-    Gains,
-    Limits,
-    course_gain_names,
-    gain_preset_names,
-    load_gains,
-)
+from quadnav.control.gains import Gains, Limits, course_gain_names
+from quadnav.control.registry import controller_gains, gain_set_names
 from quadnav.errors import QuadnavError
 from quadnav.sim.flight import Ending
 from quadnav.sim.settings import SimSettings
@@ -42,7 +37,7 @@ def test_hover_holds_within_a_centimetre_with_sensor_noise_and_gusts():
 
 @pytest.mark.parametrize("params", [TELLO, RBE595], ids=["tello", "rbe595"])
 def test_hover_without_disturbance_does_not_move(params):
-    flight = simulate(hold_trajectory(HOME, 5.0), params, load_gains(preset=params.gains),
+    flight = simulate(hold_trajectory(HOME, 5.0), params, controller_gains("cascade", params),
                       settings=FULL_RECORD)
     assert flight.max_tracking_error < 1e-9
 
@@ -50,7 +45,7 @@ def test_hover_without_disturbance_does_not_move(params):
 def _step(params, axis: int, size: float, gains: Gains | None = None, seconds: float = 8.0):
     start = hover_state(params, HOME - size * np.eye(3)[axis])
     flight = simulate(hold_trajectory(HOME, seconds), params,
-                      gains or load_gains(preset=params.gains), settings=FULL_RECORD,
+                      gains or controller_gains("cascade", params), settings=FULL_RECORD,
                       initial_state=start)
     response = step_response(flight.t, flight.position, start[0:3], HOME, 0.0)
     return flight, response.overshoot, response.settling_time
@@ -97,7 +92,7 @@ def test_a_gains_file_sets_only_its_keys(tmp_path):
     path = tmp_path / "gains.toml"
     path.write_text("attitude_kp = [8.0, 8.0, 4.0]\n[velocity]\nki = [0.5, 0.5, 1.0]\n"
                     "[limits]\ntilt_max_deg = 30.0\n")
-    gains = load_gains(path)
+    gains = controller_gains("cascade", TELLO, path)
     default = Gains()
     assert np.array_equal(gains.attitude_kp, [8.0, 8.0, 4.0])
     assert np.array_equal(gains.velocity.ki, [0.5, 0.5, 1.0])
@@ -118,30 +113,31 @@ def test_a_bad_gains_file_names_the_file_and_key(tmp_path, text, message):
     path = tmp_path / "gains.toml"
     path.write_text(text)
     with pytest.raises(QuadnavError, match=message) as error:
-        load_gains(path)
+        controller_gains("cascade", TELLO, path)
     assert str(path) in str(error.value)
 
 
 def test_vehicle_presets_name_their_gain_sets():
-    assert gain_preset_names() == ["rbe595", "tello"]
+    assert gain_set_names() == ["rbe595", "tello"]
     assert TELLO.gains == "tello" and RBE595.gains == "rbe595"
-    assert load_gains(preset="rbe595").rate.kp[0] < Gains().rate.kp[0]
-    with pytest.raises(QuadnavError, match="unknown gain set"):
-        load_gains(preset="nope")
+    assert controller_gains("cascade", RBE595).rate.kp[0] < Gains().rate.kp[0]
+    with pytest.raises(QuadnavError, match="the tello vehicle names the gain set 'nope'; "
+                                           "expected one of rbe595, tello"):
+        controller_gains("cascade", TELLO.replace(gains="nope"))
 
 
 def test_course_gain_tables_set_the_18_outer_gains_on_the_vehicles_own():
     names = course_gain_names()
     assert "p2a-starter" in names and len(names) >= 6
-    for preset in ("tello", "rbe595"):
-        own = load_gains(preset=preset)
+    for vehicle in (TELLO, RBE595):
+        own = controller_gains("cascade", vehicle)
         for name in names:
-            table = load_gains(name, preset)
+            table = controller_gains("cascade", vehicle, name)
             assert np.array_equal(table.rate.kp, own.rate.kp)  # inner loops kept
             assert np.array_equal(table.attitude_kp, own.attitude_kp)
             assert not np.array_equal(table.velocity.kp, own.velocity.kp)
-    starter = load_gains("p2a-starter")
+    starter = controller_gains("cascade", TELLO, "p2a-starter")
     assert starter.position.kp.tolist() == [20.0, 20.0, 0.1]
     assert starter.velocity.kd.tolist() == [5.0, 5.0, 0.5534]
     with pytest.raises(QuadnavError, match="p2a-nope"):
-        load_gains("p2a-nope")
+        controller_gains("cascade", TELLO, "p2a-nope")

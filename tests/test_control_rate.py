@@ -11,8 +11,13 @@ import pytest
 from clitools import assert_user_error, run_here
 from scipy.linalg import expm
 
-from quadnav.control.gains import course_gain_names, load_gains
-from quadnav.control.registry import CONTROLLERS, controller_gains, make_controller
+from quadnav.control.gains import course_gain_names
+from quadnav.control.registry import (
+    CONTROLLERS,
+    check_controller_rate,
+    controller_gains,
+    make_controller,
+)
 from quadnav.control.sampling import (
     GAIN_MARGIN,
     axis_loops,
@@ -22,7 +27,11 @@ from quadnav.control.sampling import (
     sampled_plant,
 )
 from quadnav.errors import ControlWarning, QuadnavError
+from quadnav.mission import MissionSettings
 from quadnav.sim import loop
+from quadnav.sim.settings import SimSettings
+from quadnav.tracking import track_reference
+from quadnav.trajectory.references import load_reference
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import hover_state, vehicle_arrays
 from quadnav.vehicle.params import load_params, preset_names
@@ -130,7 +139,8 @@ def test_gains_unstable_at_any_rate_are_refused(tmp_path):
                      "ki = [40.0, 40.0, 5.0]\nkd = [0.0, 0.0, 0.0]\n")
     with pytest.raises(QuadnavError, match="roll loop on the tello vehicle is unstable at any "
                                            "control rate: its gains cannot fly"):
-        check_control_rate(make_controller("cascade", TELLO, load_gains(gains)), TELLO, 1000.0)
+        check_control_rate(make_controller("cascade", TELLO, controller_gains(
+            "cascade", TELLO, gains)), TELLO, 1000.0)
 
 
 def test_another_controller_is_not_checked():
@@ -141,3 +151,77 @@ def test_another_controller_is_not_checked():
     with warnings.catch_warnings():
         warnings.simplefilter("error", ControlWarning)
         check_control_rate(other, TELLO, 10.0)
+
+
+#: Plain-Python controllers holding a hover, one per kind of command: an attitude (the
+#: cascade's attitude and rate loops fly it), body rates (its rate loop alone), motor speeds
+#: (no loop of quadnav's) and one that leaves its abstraction to its first update.
+PLAIN = '''
+import numpy as np
+
+
+class Attitude:
+    control_abstraction = "cmd_ctatt"
+
+    def __init__(self, quad_params):
+        self.weight = quad_params["mass"] * 9.81
+        self.hover = np.sqrt(self.weight / 4 / quad_params["k_eta"])
+
+    def update(self, t, state, flat_output):
+        return {"cmd_thrust": self.weight, "cmd_q": [0.0, 0.0, 0.0, 1.0],
+                "cmd_w": [0.0, 0.0, 0.0], "cmd_motor_speeds": [self.hover] * 4}
+
+
+class Rates(Attitude):
+    control_abstraction = "cmd_ctbr"
+
+
+class Motors(Attitude):
+    control_abstraction = "cmd_motor_speeds"
+
+
+class Undeclared(Attitude):
+    control_abstraction = None
+'''
+
+
+def test_one_control_rate_rule_for_every_controller(tmp_path):
+    """The control rate is checked against the loops that run at it, by every flight: under a
+    plain-Python controller the cascade's loops that its commands fly through (on main, a
+    plain-Python controller was never checked: fly, track and kino --fly passed it)."""
+    (tmp_path / "plain.py").write_text(PLAIN)
+    spec = {name: f"{tmp_path / 'plain.py'}:{name}"
+            for name in ("Attitude", "Rates", "Motors", "Undeclared")}
+    slow = SimSettings(control_rate=16.0, physics_rate=960.0, record_rate=16.0)
+    unstable = (f"control rate 16 Hz: the {spec['Attitude']} controller's roll loop (the "
+                "cascade's, flying its cmd_ctatt commands) on the tello vehicle, sampled at that "
+                "rate behind its rotors' 0.02 s lag, is unstable (stable from 21 Hz, a gain "
+                "margin of 2 from 41 Hz); raise --control-rate")
+    with pytest.raises(QuadnavError) as refused:
+        check_controller_rate(spec["Attitude"], TELLO, None, 16.0)
+    assert str(refused.value) == unstable
+    for fly in (lambda: MissionSettings(controller=spec["Attitude"], sim=slow),
+                lambda: track_reference(load_reference("hover:duration=0.5"), TELLO,
+                                        settings=slow, controller=spec["Attitude"])):
+        with pytest.raises(QuadnavError, match=r"cmd_ctatt commands.*is unstable"):
+            fly()
+    # body rates fly through the rate loop alone, which keeps some margin at 16 Hz
+    with pytest.warns(ControlWarning) as warned:
+        check_controller_rate(spec["Rates"], TELLO, None, 16.0)
+    assert [str(w.message) for w in warned] == [
+        f"control rate 16 Hz: the {spec['Rates']} controller's roll loop (the cascade's, "
+        "flying its cmd_ctbr commands) on the tello vehicle keeps a gain margin of only 1.41, "
+        "under 2: poorly damped (stable from 13 Hz, a gain margin of 2 from 31 Hz)"]
+    # a controller commanding its rotors, or choosing its commands in flight, has none here
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for name in ("Motors", "Undeclared"):
+            check_controller_rate(spec[name], TELLO, None, 10.0)
+            MissionSettings(controller=spec[name], sim=slow)
+    # the command line: refused before planning, by fly and track alike
+    out = tmp_path / "out"
+    for command in (("fly",), ("track", "hover")):
+        result = run_here(*command, "--controller", spec["Attitude"], "--control-rate", "16",
+                          "--physics-rate", "960", "-o", out)
+        assert_user_error(result, f"quadnav: error: {unstable}")
+        assert not out.exists()

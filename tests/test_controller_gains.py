@@ -13,7 +13,7 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, load_gains
+from quadnav.control.gains import CASCADE_SETS, Gains, gain_set
 from quadnav.control.registry import (
     CONTROLLERS,
     controller_gains,
@@ -24,12 +24,16 @@ from quadnav.control.sampling import axis_loops
 from quadnav.control.se3 import SE3Gains
 from quadnav.errors import QuadnavError
 from quadnav.mission import MissionSettings
+from quadnav.sim.settings import SimSettings
+from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
 from quadnav.trajectory.references import load_reference
 from quadnav.vehicle.params import load_params
 
 TELLO = load_params("tello")
 RBE595 = load_params("rbe595")
+#: The cascade's gain set shipped for the rbe595 vehicle, read as it is shipped.
+RBE595_OWN = gain_set(Gains(), CASCADE_SETS, "rbe595")
 
 
 def test_the_library_flies_a_vehicle_with_its_own_gains():
@@ -37,15 +41,31 @@ def test_the_library_flies_a_vehicle_with_its_own_gains():
     # vehicle (100 times the inertia) cannot fly well, where the command line loaded its own
     settings = MissionSettings(vehicle=RBE595)
 
-    assert as_plain(settings.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(settings.flown_gains) == as_plain(RBE595_OWN)
     assert as_plain(settings.flown_gains) != as_plain(Gains())
     assert as_plain(MissionSettings().flown_gains) == as_plain(Gains())  # the Tello's
     # another vehicle put in later flies its own too, not the gains of the one it replaced
     swapped = dataclasses.replace(MissionSettings(), vehicle=RBE595)
-    assert as_plain(swapped.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(swapped.flown_gains) == as_plain(RBE595_OWN)
     # and so do the other entries of the library: a tracking and its parameters
     tracking = track_reference(load_reference("hover:duration=0.5"), RBE595)
-    assert tracking.parameters()["gains"] == as_plain(load_gains(preset="rbe595"))
+    assert tracking.parameters()["gains"] == as_plain(RBE595_OWN)
+
+
+def test_simulate_flies_the_vehicle_with_its_own_gains_when_given_none():
+    # on main, simulate(reference, rbe595) with no gains and no controller flew the cascade's
+    # defaults, the Tello's; it flies the gains tuned for the vehicle the controller knows
+    step = load_reference("step:axis=x,size=0.5,duration=1.5")
+    fast = SimSettings(control_rate=500.0, settle_time=0.0)
+    own = simulate(step, RBE595, settings=fast)
+    tuned = simulate(step, RBE595, controller_gains("cascade", RBE595), settings=fast)
+    tellos = simulate(step, RBE595, Gains(), settings=fast)
+    assert np.array_equal(own.states, tuned.states)
+    assert not np.allclose(own.states, tellos.states, atol=1e-3)
+    # a plant flown by a controller that knows another vehicle: that vehicle's gains
+    known = simulate(step, TELLO, settings=fast, model=RBE595)
+    assert np.array_equal(known.states, simulate(step, TELLO, controller_gains(
+        "cascade", RBE595), settings=fast, model=RBE595).states)
 
 
 def test_each_controller_builds_from_the_vehicle_and_its_own_gains():
@@ -127,7 +147,7 @@ def test_one_gains_rule_for_every_controller(tmp_path):
     # the inner loops fly the vehicle's own gains, in the library too (on main they flew
     # MissionSettings' default Gains(), the Tello's, whatever the vehicle)
     settings = MissionSettings(vehicle=RBE595, controller=rates)
-    assert as_plain(settings.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(settings.flown_gains) == as_plain(RBE595_OWN)
     def same(one, other) -> bool:  # compiled gains: tuples of arrays and numbers
         return all(np.array_equal(a, b) for a, b in zip(one.gains, other.gains, strict=True))
 

@@ -16,7 +16,8 @@ from quadnav.batch.grid import parse_spec
 from quadnav.cli.main import build_parser
 from quadnav.cli.mission_args import mission_config
 from quadnav.config import as_plain
-from quadnav.control.gains import load_gains
+from quadnav.control.gains import CASCADE_SETS, Gains, gain_set
+from quadnav.control.registry import controller_gains
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_SPEED, SPEED, speed_value
 from quadnav.mission import MissionSettings
@@ -225,7 +226,8 @@ def test_a_run_of_plain_python_plug_ins_flies_again_exactly(tmp_path):
         12.0, f"{here / 'plain_planner.py'}:graph_search")
     assert kept.vehicle["mass"] == 0.25 and kept.vehicle["rotor_drag"] == [2e-6, 2e-6, 1e-6]
     # the inner loops' gains, the course table's, kept by their values
-    assert kept.controller.gains["position"] == as_plain(load_gains("p2a-starter").position)
+    assert kept.controller.gains["position"] == as_plain(controller_gains(
+        "cascade", load_params("tello"), "p2a-starter").position)
     (tmp_path / "here" / "my_params.py").unlink()  # the vehicle is kept by its values
 
     again = run_here("refly", tmp_path / "here" / "first", "--no-figures", "-o", "again",
@@ -349,7 +351,8 @@ def test_fly_flies_the_mission_a_batch_builds_from_the_same_settings(tmp_path):
     batch = json.loads(json.dumps(row.parameters()))
     assert {key: value for key, value in batch.items() if key != "plant"} == parameters
     assert "plant" in batch  # the batch's spread, which fly has no flag for
-    assert parameters["gains"] == as_plain(load_gains("p2a-starter", "rbe595"))
+    assert parameters["gains"] == as_plain(controller_gains("cascade", load_params("rbe595"),
+                                                           "p2a-starter"))
 
 
 def test_the_library_defaults_are_the_builders():
@@ -360,4 +363,4 @@ def test_the_library_defaults_are_the_builders():
     rbe595 = MissionSettings(vehicle=load_params("rbe595"))
     assert as_plain(MissionConfig(vehicle="rbe595").settings().flown_gains) == as_plain(
         rbe595.flown_gains)
-    assert as_plain(rbe595.flown_gains) == as_plain(load_gains(preset="rbe595"))
+    assert as_plain(rbe595.flown_gains) == as_plain(gain_set(Gains(), CASCADE_SETS, "rbe595"))

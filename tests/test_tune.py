@@ -14,12 +14,14 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.config import as_plain
-from quadnav.control.gains import Gains, course_gain_names, load_gains
+from quadnav.control.gains import Gains, course_gain_names
+from quadnav.control.registry import controller_gains
 from quadnav.errors import QuadnavError
 from quadnav.tune.evaluate import item_cost
 from quadnav.tune.run import TuneRun, TuneSettings
 from quadnav.tune.space import CASCADE, OUTER, starting_point, with_values
 from quadnav.tune.study import StudySettings, distributions, open_study
+from quadnav.vehicle.params import load_params
 
 TRAINING = """references = ["hover:duration=3", "step:axis=x,size=1,duration=4",
               "helix:radius=1,speed=1.5,laps=1"]
@@ -56,7 +58,7 @@ def _trials(folder) -> list[list[str]]:
 
 @pytest.mark.parametrize("preset", ["tello", "rbe595"])
 def test_the_starting_point_is_the_vehicles_own_gains(preset):
-    gains = load_gains(preset=preset)
+    gains = controller_gains("cascade", load_params(preset))
     assert as_plain(with_values(gains, starting_point(gains, CASCADE))) == as_plain(gains)
     point = starting_point(gains, OUTER)
     assert set(point) == {f"{loop}.{gain}.{axes}" for loop in ("position", "velocity")
@@ -140,7 +142,7 @@ def test_tuned_gains_beat_the_vehicles_own_and_every_course_table_held_out(tmp_p
         assert tuned["successes"] >= scores["successes"], name
         assert tuned["median_rms_tracking_error_m"] < scores["median_rms_tracking_error_m"], name
     # gains.toml is the best trial's point, a whole gain set that flies as --gains.
-    gains = load_gains(out / "gains.toml")
+    gains = controller_gains("cascade", load_params("tello"), out / "gains.toml")
     assert as_plain(gains) == as_plain(with_values(Gains(), record["best_params"]))
     assert record["best_objective"] <= record["scores"]["training"]["own"]["objective"]
     rows = _trials(out)

@@ -32,8 +32,12 @@ import numpy as np
 from scipy.interpolate import PPoly
 
 from quadnav.config import as_plain
-from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
-from quadnav.control.sampling import check_control_rate
+from quadnav.control.registry import (
+    DEFAULT_CONTROLLER,
+    check_controller_rate,
+    controller_gains,
+    make_controller,
+)
 from quadnav.errors import QuadnavError
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.result import KinoResult
@@ -189,7 +193,7 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
     Raises:
         QuadnavError: no plan, one that does not end at rest at ``world.goal``, or a
             control rate too slow for the controller's gains
-            (:func:`~quadnav.control.sampling.check_control_rate`).
+            (:func:`~quadnav.control.registry.check_controller_rate`).
     """
     vehicle = vehicle or load_params()
     if gains is None:
@@ -201,8 +205,8 @@ def fly_kino_plan(world: World, result: KinoResult, model: SampledQuadrotor,
         raise QuadnavError(f"the plan ends at {format_point(end)}, not at the goal "
                            f"{'(none)' if world.goal is None else format_point(world.goal)} "
                            f"of {world.name}")
+    check_controller_rate(controller, vehicle, gains, settings.control_rate)
     flown_by = make_controller(controller, vehicle, gains)
-    check_control_rate(flown_by, vehicle, settings.control_rate)
     flight = simulate(trajectory, vehicle, world=world, settings=settings, progress=progress,
                       controller=flown_by)
     return KinoFlight(world, result, model, search, trajectory, flight, vehicle, gains,

@@ -27,12 +27,10 @@ from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
 from quadnav.control.registry import (
     DEFAULT_CONTROLLER,
-    INNER_LOOPS,
-    controller_class,
+    check_controller_rate,
     controller_gains,
     make_controller,
 )
-from quadnav.control.sampling import check_control_rate
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
@@ -113,7 +111,7 @@ class MissionSettings:
         sim: rates, stopping and success rules, disturbances, seed. A control rate too
             slow for the controller's gains on the flown vehicle is refused, one that
             leaves them little margin warned about
-            (:func:`~quadnav.control.sampling.check_control_rate`).
+            (:func:`~quadnav.control.registry.check_controller_rate`).
         plant: the vehicle that really flies (default: ``vehicle``), e.g. heavier than
             ``vehicle``: the trajectory is made for ``vehicle`` and the controller keeps
             its model, unaware of the difference.
@@ -143,13 +141,11 @@ class MissionSettings:
     def __post_init__(self) -> None:
         if self.reference is not None:
             parse_spec(self.reference, "reference")  # QuadnavError for a malformed spec
-        # QuadnavError naming the choices for an unknown controller, or bad gains; a
-        # plain-Python one is loaded and checked, not built (it is, once per flight)
-        if controller_class(self.controller) is None:  # a compiled one: is its rate stable?
-            check_control_rate(self.flying_controller(), self.flown_vehicle,
-                               self.sim.control_rate)
-        else:  # its inner loops' gains
-            INNER_LOOPS.checked(self.vehicle, self.gains)
+        # QuadnavError naming the choices for an unknown controller, bad gains or a control
+        # rate its loops are unstable at; a plain-Python one is loaded and checked, not
+        # built (it is, once per flight)
+        check_controller_rate(self.controller, self.vehicle, self.gains,
+                              self.sim.control_rate, self.plant)
 
     @property
     def flown_gains(self) -> Any:

@@ -19,8 +19,12 @@ from typing import Any
 import numpy as np
 
 from quadnav.config import as_plain
-from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains, make_controller
-from quadnav.control.sampling import check_control_rate
+from quadnav.control.registry import (
+    DEFAULT_CONTROLLER,
+    check_controller_rate,
+    controller_gains,
+    make_controller,
+)
 from quadnav.mission import flight_metrics, flight_succeeded
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
@@ -188,7 +192,7 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
     Raises:
         QuadnavError: a flight too long for the rates (see
             :func:`~quadnav.sim.simulate.flight_steps`), or a control rate too slow for
-            the controller's gains (:func:`~quadnav.control.sampling.check_control_rate`).
+            the controller's gains (:func:`~quadnav.control.registry.check_controller_rate`).
     """
     vehicle = vehicle or load_params()
     if gains is None:
@@ -197,8 +201,8 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
     if isinstance(reference, StepReference) and reference.is_step:
         settings = settings.replace(record_rate=settings.control_rate)
     world = track_world(reference)
+    check_controller_rate(controller, vehicle, gains, settings.control_rate)
     flown_by = make_controller(controller, vehicle, gains)
-    check_control_rate(flown_by, vehicle, settings.control_rate)
     flight = simulate(reference, vehicle, world=world, settings=settings, progress=progress,
                       controller=flown_by)
     return Tracking(reference, world, flight, vehicle, gains, settings, controller)

@@ -70,10 +70,10 @@ def add_controller_argument(parser: argparse.ArgumentParser, unset: bool = False
     parser.add_argument("--controller", default=_default(DEFAULT_CONTROLLER, unset),
                         metavar="NAME|SPEC",
                         help="the controller: cascade (PX4-style), se3 (the geometric "
-                             "controller of Lee et al., rotorpy's gains), another registered "
-                             "name, or your own class in rotorpy's shape, update(t, state, "
-                             "flat_output) -> commands, named where it is: module:Class or "
-                             "path/to/file.py:Class, with keyword arguments "
+                             "controller of Lee et al., as in MEAM620 and rotorpy), another "
+                             "registered name, or your own class in rotorpy's shape, "
+                             "update(t, state, flat_output) -> commands, named where it is: "
+                             "module:Class or path/to/file.py:Class, with keyword arguments "
                              "Class(key=value, ...); --gains tunes the cascade and se3, and "
                              "the cascade's inner loops that a class's attitude, rate and "
                              f"velocity commands fly through (default: {DEFAULT_CONTROLLER})")
@@ -100,7 +100,10 @@ def add_simulation_arguments(parser: argparse.ArgumentParser, unset: bool = Fals
                         default=_default(SimSettings.control_rate, unset),
                         metavar="HZ", help=f"controller updates per second, {RATE.describe()}; "
                                            "the physics rate must be a whole multiple "
-                                           f"(default: {SimSettings.control_rate:g})")
+                                           f"(default: {SimSettings.control_rate:g}); a "
+                                           "plain-Python controller or wind runs once a "
+                                           "control step: a lower rate costs less Python "
+                                           "time")
     parser.add_argument("--wind", nargs="+", type=force_or_spec, metavar=("FX|SPEC", "FY FZ"),
                         help=f"steady wind as a force on the vehicle FX FY FZ, N, world "
                              f"frame, each {FORCE.describe()}; or a wind model, a class "

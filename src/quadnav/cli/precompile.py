@@ -10,7 +10,9 @@ machine, ``NUMBA_CACHE_DIR`` set), nothing breaks: the first run compiles as bef
 
 ``python -m quadnav.cli.precompile`` runs, quietly in a scratch folder, ``quadnav plan``
 on the default world beside ``quadnav track hover`` with each controller (each has a step
-of its own and a compiled loop of its own for its type of gains), in two processes so that
+of its own and a compiled loop of its own for its type of gains) and with a plain-Python
+controller (:class:`Follow`: every plain-Python controller flies by one compiled step,
+:func:`quadnav.control.held.held_step`, in the cascade's loop), in two processes so that
 two cores compile at once; then ``quadnav fly --no-figures``, which loads
 what they compiled and compiles the rest. It exits 1, with the failing command's last
 lines on stderr, if a command fails.
@@ -24,16 +26,38 @@ import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
+from quadnav.arrays import FloatArray
 from quadnav.control.registry import CONTROLLERS
 
 #: The planner's kernels (the default world, the default budget, then refined).
 PLAN = ["plan", "--no-figures", "--quiet", "-o", "plan"]
 
 
-def track(controller: str) -> list[str]:
-    """The arguments of a hover flown with ``controller``: the simulation's kernels."""
-    return ["track", "hover", "--controller", controller, "--no-figures", "--quiet",
-            "-o", f"track-{controller}"]
+class Follow:
+    """A plain-Python controller in rotorpy's shape: the reference's velocity plus 1/s times
+    its position error, commanded as a velocity (rotorpy's ``cmd_vel``) that the cascade's
+    loops fly. Flown by :data:`PLAIN`, it compiles the step of every plain-Python
+    controller."""
+
+    control_abstraction = "cmd_vel"
+
+    def __init__(self, quad_params: dict) -> None:
+        """Built with the vehicle's rotorpy parameter dict, which it does not need."""
+
+    def update(self, t: float, state: dict, flat_output: dict) -> dict[str, FloatArray]:
+        """The velocity command (3,) m/s at ``t`` s, as ``cmd_v``."""
+        return {"cmd_v": flat_output["x_dot"] + (flat_output["x"] - state["x"])}
+
+
+def track(controller: str, folder: str | None = None, reference: str = "hover") -> list[str]:
+    """The arguments of ``reference`` flown with ``controller`` into ``folder`` (default
+    ``track-CONTROLLER``): the simulation's kernels."""
+    return ["track", reference, "--controller", controller, "--no-figures", "--quiet",
+            "-o", folder or f"track-{controller}"]
+
+
+#: A short hover flown by :class:`Follow` (it calls Python at every control step).
+PLAIN = track("quadnav.cli.precompile:Follow", "track-plain", "hover:duration=1")
 
 
 #: The whole main job, last: it compiles what neither of the others did.
@@ -68,7 +92,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="quadnav-precompile-") as scratch:
         folder = Path(scratch)
         planning = start(PLAN, folder)
-        flying = run_in_sequence([track(name) for name in CONTROLLERS], folder)
+        flying = run_in_sequence([*(track(name) for name in CONTROLLERS), PLAIN], folder)
         planned = finish(planning)
         return 0 if planned and flying and finish(start(FLY, folder)) else 1
 

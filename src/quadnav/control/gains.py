@@ -7,7 +7,7 @@ by the vehicle (the rate loop asks for angular accelerations, which the inertia 
 into torques), so one set serves vehicles of different sizes. The defaults are tuned to
 track minimum-snap trajectories at 2 m/s and more on the ``tello`` preset.
 
-A TOML file sets any keys on top of the defaults, e.g.::
+A TOML file sets any keys on top of the gains tuned for the vehicle, e.g.::
 
     [position]
     kp = [1.5, 1.5, 2.0]
@@ -17,6 +17,11 @@ A TOML file sets any keys on top of the defaults, e.g.::
 
     [limits]
     tilt_max_deg = 30.0
+
+The one way to get the gains a controller flies a vehicle with, the vehicle's own set with a
+file's or a table's keys on top, is :func:`quadnav.control.registry.controller_gains`
+(``controller_gains("cascade", vehicle, "my_gains.toml")``); this module holds the gains'
+types and reads the shipped sets and tables.
 """
 
 from __future__ import annotations
@@ -31,7 +36,6 @@ import numpy as np
 
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain, from_table, frozen_vector, read_toml, require, vector_field
-from quadnav.errors import QuadnavError
 
 C = TypeVar("C")
 #: Where the cascade's gain sets are shipped (:func:`shipped`).
@@ -137,12 +141,6 @@ class Gains:
         return as_plain(self)
 
 
-def gain_preset_names() -> list[str]:
-    """Names of the cascade's shipped gain sets: ``tello`` (the defaults) and one per
-    vehicle preset that needs its own."""
-    return sorted(["tello", *toml_names(CASCADE_SETS)])
-
-
 def course_gain_names() -> list[str]:
     """Names of the shipped course gain tables (``p2a-starter``, ``p2a-ankx22``, ...): the
     18 position and velocity gains of the WPI RBE595 starter and of published student teams,
@@ -185,16 +183,3 @@ def gain_set(defaults: C, folder: str, name: str) -> C:
     if name not in toml_names(folder):
         return defaults
     return from_table(defaults, shipped_table(folder, name), f"gain set {name}")
-
-
-def load_gains(path: str | Path | None = None, preset: str = "tello") -> Gains:
-    """The cascade's gain set ``preset`` (see :func:`gain_preset_names`), with the keys of
-    ``path`` (if any) set on top: a course gain table's name (:func:`course_gain_names`) or
-    a TOML file."""
-    if preset not in gain_preset_names():
-        raise QuadnavError(f"unknown gain set {preset!r}; expected one of "
-                           f"{', '.join(gain_preset_names())}")
-    gains = gain_set(Gains(), CASCADE_SETS, preset)
-    if path is None:
-        return gains
-    return from_table(gains, *gain_table(path))

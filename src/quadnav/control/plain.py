@@ -60,6 +60,10 @@ ABSTRACTIONS: dict[str, tuple[int, tuple[str, ...]]] = {
     "cmd_ctbr": (THRUST_RATES, ("cmd_thrust", "cmd_w")),
     "cmd_vel": (VELOCITY, ("cmd_v",)),
 }
+#: The control abstractions whose commands fly through the cascade's loops at the control
+#: rate, each saying whether its attitude loop is one of them (a body-rate command flies
+#: through the rate loop alone).
+INNER_LOOP_ABSTRACTIONS = {"cmd_ctatt": True, "cmd_ctbr": False, "cmd_vel": True}
 #: How many numbers each command key holds.
 SIZES = {"cmd_motor_speeds": 4, "cmd_motor_thrusts": 4, "cmd_thrust": 1, "cmd_moment": 3,
          "cmd_q": 4, "cmd_w": 3, "cmd_v": 3}

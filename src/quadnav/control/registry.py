@@ -21,6 +21,9 @@ A vehicle names its gain set (``VehicleParams.gains``, e.g. ``rbe595``); each co
 flies its own set of that name, or its defaults where it ships none. A gains file
 (``--gains``) sets any of the controller's keys on top (:func:`controller_gains`); a
 compiled controller without a gain table of its own refuses one.
+
+A control rate is checked against the loops that run at it, for every flight, before it
+(:func:`check_controller_rate`).
 """
 
 from __future__ import annotations
@@ -31,10 +34,11 @@ from pathlib import Path
 from typing import Any
 
 from quadnav.config import from_table
-from quadnav.control.cascade import cascade_controller
+from quadnav.control.cascade import cascade_controller, gain_arrays
 from quadnav.control.contract import Controller
 from quadnav.control.gains import CASCADE_SETS, Gains, gain_set, gain_table, toml_names
-from quadnav.control.plain import checked_abstraction, plain_controller
+from quadnav.control.plain import INNER_LOOP_ABSTRACTIONS, checked_abstraction, plain_controller
+from quadnav.control.sampling import check_control_rate, check_loops, gain_loops
 from quadnav.control.se3 import SE3Gains, se3_controller
 from quadnav.errors import QuadnavError
 from quadnav.plugins import Registry, literal_arrays, raised_in
@@ -193,3 +197,34 @@ def make_controller(text: str, vehicle: VehicleParams, gains: Any = None) -> Con
                            "a quadnav.control.contract.Controller; it returned "
                            f"{type(controller).__name__}")
     return controller
+
+
+def check_controller_rate(text: str, vehicle: VehicleParams, gains: Any, control_rate: float,
+                          plant: VehicleParams | None = None) -> None:
+    """Refuse a ``control_rate`` Hz at which a loop that runs at it is unstable on ``plant``
+    (default: ``vehicle``), and warn of one that leaves it little gain margin
+    (:func:`~quadnav.control.sampling.check_loops`): the loops of the controller ``text``
+    names, a compiled one built for ``vehicle`` with ``gains`` (None: those tuned for it),
+    or, under a plain-Python controller (not built), the cascade's loops that its control
+    abstraction flies through with those gains (:data:`~quadnav.control.plain.
+    INNER_LOOP_ABSTRACTIONS`). A plain-Python controller that commands the rotors or the
+    wrench itself, or leaves its abstraction to its first ``update``, has no loops here to
+    check. The one check of a flight's control rate: missions, tracking and kinodynamic
+    flights make it before they fly.
+
+    Raises:
+        QuadnavError: an unknown controller or one that cannot be used (as
+            :func:`make_controller`), gains of another type, or a rate at which a loop is
+            unstable.
+    """
+    found, kwargs = CONTROLLERS.load(text)
+    flown = plant or vehicle
+    if not isinstance(found, type):
+        check_control_rate(make_controller(text, vehicle, gains), flown, control_rate)
+        return
+    abstraction = checked_abstraction(text, found, kwargs)
+    inner = INNER_LOOPS.checked(vehicle, gains)
+    if abstraction in INNER_LOOP_ABSTRACTIONS:
+        check_loops(gain_loops(gain_arrays(inner), INNER_LOOP_ABSTRACTIONS[abstraction]),
+                    f"the {text} controller's", flown, control_rate,
+                    f" (the cascade's, flying its {abstraction} commands)")

@@ -24,8 +24,10 @@ some axis's loop is unstable (a gain margin of at most 1) is refused; one that l
 the textbook's 2 (6 dB, :data:`GAIN_MARGIN`) is warned about. What the default gains keep,
 and the lowest rates they are stable at, are in docs/flying.md (*Control rate*);
 ``tests/test_control_rate.py`` checks them, and the lowest stable rates against the rates at
-which the simulated loop turns unstable. A controller of another kind (a plain-Python one
-too) is not checked.
+which the simulated loop turns unstable. Under a plain-Python controller the loops checked are
+the cascade's that its commands fly through (its rate loop alone for body-rate commands:
+:func:`~quadnav.control.registry.check_controller_rate`); a controller of another kind is not
+checked.
 """
 
 from __future__ import annotations
@@ -65,13 +67,22 @@ class AxisLoop(NamedTuple):
 
 def axis_loops(controller: Controller) -> list[AxisLoop] | None:
     """The three body axes' loops of a built-in controller (cascade or SE(3), known by the
-    type of its gains), or None for any other (a plain-Python controller too: its own code
-    decides which of the cascade's loops it flies through)."""
-    g = controller.gains
+    type of its gains), or None for any other (a plain-Python controller too: which of the
+    cascade's loops it flies through is its control abstraction's,
+    :func:`~quadnav.control.registry.check_controller_rate`)."""
     if controller.python is not None:
         return None
+    return gain_loops(controller.gains)
+
+
+def gain_loops(g: object, attitude: bool = True) -> list[AxisLoop] | None:
+    """The three body axes' loops of the compiled gains ``g`` (the cascade's
+    :class:`~quadnav.control.cascade.GainArrays` or SE(3)'s
+    :class:`~quadnav.control.se3.SE3GainArrays`; None for any other); without ``attitude``
+    the cascade's rate loop alone (``ka`` = 0: body-rate commands, no attitude loop)."""
     if isinstance(g, GainArrays):
-        return [AxisLoop(float(g.attitude_kp[b]), *(float(g.rate[k, b]) for k in range(3)),
+        return [AxisLoop(float(g.attitude_kp[b]) if attitude else 0.0,
+                         *(float(g.rate[k, b]) for k in range(3)),
                          float(g.derivative_cutoff)) for b in range(3)]
     if isinstance(g, SE3GainArrays):
         return [AxisLoop(float(g.kr[b] / g.kw[b]), float(g.kw[b]), 0.0, 0.0, math.inf)
@@ -127,7 +138,10 @@ def transition(loop: AxisLoop, plant: tuple[np.ndarray, np.ndarray], period: flo
 
 def _stable(loop: AxisLoop, plant: tuple[np.ndarray, np.ndarray], period: float,
             scale: float) -> bool:
-    return float(np.max(np.abs(np.linalg.eigvals(transition(loop, plant, period, scale))))) < 1.0
+    step = transition(loop, plant, period, scale)
+    if loop.attitude == 0.0:  # a rate loop alone: the angle, fed back nowhere, is left out
+        step = step[1:, 1:]
+    return float(np.max(np.abs(np.linalg.eigvals(step)))) < 1.0
 
 
 def gain_margin(loop: AxisLoop, lag: float, control_rate: float) -> float:
@@ -189,19 +203,32 @@ def check_control_rate(controller: Controller, vehicle: VehicleParams,
                        control_rate: float) -> None:
     """Refuse a ``control_rate`` Hz at which a built-in controller's loop on ``vehicle``
     (behind its rotors' lag) is unstable, and warn of one that leaves it a gain margin under
-    :data:`GAIN_MARGIN` (see the module docstring); other controllers pass unchecked.
+    :data:`GAIN_MARGIN` (:func:`check_loops`); other controllers pass unchecked.
 
     Raises:
         QuadnavError: some axis's sampled loop is unstable at that rate (or at any).
     """
-    loops = axis_loops(controller)
+    check_loops(axis_loops(controller), f"the {controller.name} controller's", vehicle,
+                control_rate)
+
+
+def check_loops(loops: list[AxisLoop] | None, owner: str, vehicle: VehicleParams,
+                control_rate: float, note: str = "") -> None:
+    """Refuse a ``control_rate`` Hz at which one of ``loops`` (None: nothing to check) on
+    ``vehicle`` (behind its rotors' lag) is unstable, and warn of one that leaves a gain
+    margin under :data:`GAIN_MARGIN` (see the module docstring). Messages name the loop
+    ``{owner} {axis} loop{note}``.
+
+    Raises:
+        QuadnavError: some axis's sampled loop is unstable at that rate (or at any).
+    """
     if loops is None:
         return
     lag = vehicle.motor_time_constant
     if keeps_margin(loops, lag, control_rate, GAIN_MARGIN):
         return
     verdict = rate_verdict(loops, lag, control_rate)
-    loop = f"the {controller.name} controller's {verdict.axis} loop on the {vehicle.name} vehicle"
+    loop = f"{owner} {verdict.axis} loop{note} on the {vehicle.name} vehicle"
     if not keeps_margin(loops, lag, RATE.high, 1.0):
         raise QuadnavError(f"{loop} is unstable at any control rate: its gains cannot fly")
     rates = (f"stable from {math.ceil(lowest_rate(loops, lag, 1.0))} Hz, a gain margin of "

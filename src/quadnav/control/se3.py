@@ -15,9 +15,10 @@ One step:
    cannot make the wrench; motor commands in [0, 1].
 
 It has no integral terms, so a steady force it does not model (wind) leaves an offset.
-The default gains (:class:`SE3Gains`) are rotorpy's for the Crazyflie, which in these units
-suit any small quadrotor whose motors respond within a few hundredths of a second; a TOML
-file sets any of them (``--gains FILE``)::
+The default gains (:class:`SE3Gains`) are rotorpy's for the Crazyflie (its ``SE3Control``'s
+position gains, and the attitude gains it shipped before rotorpy 3.0, which has 310 and 57),
+with a gentler yaw; in these units they suit any small quadrotor whose motors respond within
+a few hundredths of a second. A TOML file sets any of them (``--gains FILE``)::
 
     kx = [6.5, 6.5, 15.0]      # position, 1/s^2
     kv = [4.0, 4.0, 9.0]       # velocity, 1/s
@@ -49,7 +50,7 @@ MEMORY_SIZE = 1
 @dataclass(frozen=True, eq=False)
 class SE3Gains:
     """The geometric controller's gains, per axis (3,), each >= 0 (defaults: rotorpy's
-    ``SE3Control``, with a gentler yaw).
+    ``SE3Control``'s before rotorpy 3.0, with a gentler yaw; see the module docstring).
 
     Attributes:
         kx: position, 1/s^2 (world axes).

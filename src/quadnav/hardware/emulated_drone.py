@@ -34,8 +34,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.control.cascade import cascade_controller
 from quadnav.control.gains import Gains
+from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.hardware.arc import Arc
 from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
@@ -218,7 +218,8 @@ class EmulatedDrone:
         battery_drain: how many times faster than :data:`DRAIN_FLYING` the battery
             drains in flight (an aged battery: > 1; idle, it drains at :data:`DRAIN_IDLE`).
         params: the vehicle (default: the ``tello`` preset).
-        gains: the cascade (default: :class:`~quadnav.control.gains.Gains`).
+        gains: the cascade's (default: those tuned for ``params``,
+            :func:`~quadnav.control.registry.controller_gains`).
         settings: the simulator's rates (default: :class:`~quadnav.sim.SimSettings`).
     """
 
@@ -228,7 +229,7 @@ class EmulatedDrone:
         self.params = params or load_params()
         self.settings = settings or SimSettings()
         self._vehicle = vehicle_arrays(self.params)
-        self._controller = cascade_controller(gains)
+        self._controller = make_controller(DEFAULT_CONTROLLER, self.params, gains)
         self._dt = 1.0 / self.settings.control_rate
         self.start = np.asarray(start, dtype=np.float64).reshape(3)
         self.floor = float(self.start[2])

@@ -35,9 +35,9 @@ from collections.abc import Callable
 import numpy as np
 
 from quadnav.arrays import FloatArray
-from quadnav.control.cascade import cascade_controller
 from quadnav.control.contract import Controller
 from quadnav.control.gains import Gains
+from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
 from quadnav.sim import loop
 from quadnav.sim.excursion import Excursion, body_excursion
@@ -134,8 +134,9 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
             any other :class:`~quadnav.trajectory.reference.Reference`.
         params: the vehicle that flies, the plant (default: the ``tello`` preset).
-        gains: the cascade's gains (default: :class:`~quadnav.control.gains.Gains`), when
-            no ``controller`` is given.
+        gains: the cascade's gains, when no ``controller`` is given (default: those tuned
+            for ``model``, the vehicle the controller knows,
+            :func:`~quadnav.control.registry.controller_gains`).
         world: the real (uninflated) map: its blocks are obstacles, its boundary the box
             the centre must stay in (within ``settings.boundary_tolerance``) and its lower
             face the floor, met safely only where the reference is on it (within
@@ -150,10 +151,10 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
             that differs from it (heavier, weaker rotors, more drag) is flown by a
             controller tuned for ``model`` that does not know the difference.
         controller: any :class:`~quadnav.control.contract.Controller` (default: the
-            cascade with ``gains``).
+            cascade with ``gains``, :func:`~quadnav.control.registry.make_controller`).
     """
     params = params or load_params()
-    controller = controller or cascade_controller(gains)
+    controller = controller or make_controller(DEFAULT_CONTROLLER, model or params, gains)
     settings = settings or SimSettings()
     began = time.perf_counter()
     dt = 1.0 / settings.control_rate

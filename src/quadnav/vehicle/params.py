@@ -69,7 +69,7 @@ class VehicleParams:
         body_size: (3,) size of the collision box along body x, y, z, m.
         gravity: m/s^2.
         gains: name of the controller gain set tuned for this vehicle (see
-            :func:`quadnav.control.gains.gain_preset_names`).
+            :func:`quadnav.control.registry.gain_set_names`).
     """
 
     name: str = "custom"
