@@ -21,6 +21,8 @@ from quadnav.batch.table import read_rows, same_row
 ray = pytest.importorskip("ray", reason="Ray is an optional extra: pip install 'quadnav[ray]'")
 pytest.importorskip("ray._private.authentication",
                     reason="a Ray without token authentication (before 2.52)")
+#: One cluster for the whole file: its tests run on one xdist worker (--dist loadgroup).
+pytestmark = pytest.mark.xdist_group("ray-cluster")
 
 #: Seconds a quadnav command may take here before the test gives up on it.
 COMMAND_TIMEOUT = 300
