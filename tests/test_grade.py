@@ -313,9 +313,8 @@ def test_wrong_keys_fail_their_mission_with_the_line(tmp_path):
     row = grade_json(tmp_path / "out")["missions"][0]["submission"]
     assert row["outcome"] == "part error" and row["traceback"] is None
     assert row["reason"] == ("controller controller.py:WrongKeys: update(0, state, "
-                             "flat_output) returned thrust: expected the commands of a "
-                             "control abstraction: cmd_motor_speeds, cmd_motor_thrusts, "
-                             "cmd_thrust with cmd_moment, cmd_q or cmd_w, or cmd_v")
+                             "flat_output) returned no cmd_thrust or cmd_q (it gave thrust): "
+                             "flying by cmd_ctatt, expected cmd_thrust and cmd_q")
 
 
 def test_a_part_that_calls_exit_fails_its_mission_not_the_grader(tmp_path):
