@@ -1,8 +1,9 @@
 """The summary of a batch: success rates per group of grid values with Wilson intervals,
 and ``summary.json``.
 
-A group is every distinct combination of the grid values but the seed: map, speed, wind,
-gusts, spread, planner and gains, and the start, goal and margin when they were given
+A group is every distinct combination of the grid values but the seed: map, speed, wind
+(force or class), gusts, spread, planner, gains, controller and trajectory method or class,
+and the start, goal and margin when they were given
 (not drawn from each seed). Success is the mission's own: the goal reached within the
 tolerance with no contact and the body inside the map; a refused mission counts as a failure.
 Apart from it, each rate counts the flights that kept less margin than asked off the legs
@@ -24,8 +25,8 @@ from quadnav.files import atomic_output
 #: z of a two-sided 95 % normal interval.
 Z95 = 1.959963984540054
 #: Columns whose value names a group (the start and goal only when given).
-GROUP_COLUMNS = ("map", "speed", "wind_x", "wind_y", "wind_z", "gusts", "spread", "planner",
-                 "gains", "margin_m")
+GROUP_COLUMNS = ("map", "speed", "wind_x", "wind_y", "wind_z", "wind_model", "gusts", "spread",
+                 "planner", "gains", "controller", "method", "reference", "margin_m")
 QUERY_COLUMNS = tuple(f"{end}_{a}" for end in ("start", "goal") for a in AXES)
 #: Columns whose medians each group reports.
 MEDIAN_COLUMNS = ("rms_tracking_error_m", "min_clearance_m", "trajectory_duration_s")

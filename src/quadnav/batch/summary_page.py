@@ -1,7 +1,8 @@
 """``summary.html``: one self-contained page over a batch's results, readable offline.
 
 * the success rate per map and speed as a heat map, one panel per combination of the
-  other grid values (wind, gusts, spread, planner, gains), each cell with its Wilson 95 %
+  other grid values (wind, gusts, spread, planner, gains, controller, trajectory method or
+  class), each cell with its Wilson 95 %
   interval;
 * box plots of the RMS tracking error, the least clearance and the trajectory duration
   of each group's flown missions;
@@ -147,7 +148,9 @@ class _Groups:
             parts.append(group["planner"])
         if "gains" in self.varying:
             parts.append(f"gains {Path(group['gains']).name}")
-        return ", ".join(parts)
+        parts += [group[name] or "" for name in ("wind_model", "controller", "method",
+                                                  "reference") if name in self.varying]
+        return ", ".join(part for part in parts if part)
 
     def label(self, group: dict[str, Any], full: bool = False) -> str:
         """Everything that tells the group apart from the others, the map by its short
