@@ -31,6 +31,7 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 
 from quadnav import __version__
+from quadnav.batch.compare import short_spec
 from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
 from quadnav.files import atomic_output
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
@@ -145,11 +146,11 @@ class _Groups:
         if "spread" in self.varying:
             parts.append(f"spread {group['spread']}")
         if "planner" in self.varying:
-            parts.append(group["planner"])
+            parts.append(short_spec(group["planner"]))
         if "gains" in self.varying:
             parts.append(f"gains {Path(group['gains']).name}")
-        parts += [group[name] or "" for name in ("wind_model", "controller", "method",
-                                                  "reference") if name in self.varying]
+        parts += [short_spec(group[name] or "") for name in (
+            "wind_model", "controller", "method", "reference") if name in self.varying]
         return ", ".join(part for part in parts if part)
 
     def label(self, group: dict[str, Any], full: bool = False) -> str:
@@ -285,19 +286,19 @@ def _cell(value: Any) -> str:
     return html.escape(str(value))
 
 
-def _breakable(text: str) -> str:
-    """``text`` as HTML that may wrap after each ``/`` and ``_``, so a long path or column
-    name fits a narrow column."""
-    return re.sub(r"([/_])", r"\1<wbr>", html.escape(text))
+def breakable(text: str) -> str:
+    """``text`` as HTML that may wrap after each ``/``, ``_``, ``:`` and ``(``, so a long
+    path, plug-in spec or column name fits a narrow column."""
+    return re.sub(r"([/_:(])", r"\1<wbr>", html.escape(text))
 
 
 def groups_table(labels: _Groups) -> str:
     """The groups as an HTML table: what tells them apart, n, successes, the rate and its
     interval (percent), refused missions, flights short of the margin and the medians."""
     header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
-              _breakable("kept less margin"),
-              *(_breakable(f"median {name}") for name in MEDIAN_COLUMNS))
-    rows = [(_breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
+              breakable("kept less margin"),
+              *(breakable(f"median {name}") for name in MEDIAN_COLUMNS))
+    rows = [(breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
              _percent(g["success_rate"]),
              f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
              str(g["short_of_margin"]),

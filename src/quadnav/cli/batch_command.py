@@ -10,6 +10,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from quadnav.batch.compare import contender_rows, varying_axes
 from quadnav.batch.grid import (
     DEFAULT_METHOD,
     NO_REFERENCE,
@@ -147,9 +148,23 @@ def batch(args: argparse.Namespace) -> int:
           f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
+    _print_contenders(run.finished, folder)
     print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
     print("wrote " + ", ".join(str(folder / name) for name in written))
     return 0
+
+
+def _print_contenders(rows: list[dict], folder: Path) -> None:
+    """The success rate of each contender of ``rows`` when the batch has several."""
+    by = varying_axes(rows)
+    if not by:
+        return
+    print(f"per {', '.join(by)} (quadnav compare {folder} draws the leaderboard):")
+    for name, group in contender_rows(rows, by).items():
+        found = rate(group)
+        print(f"  {name}: {found['successes']} of {found['n']}, "
+              f"{100 * found['success_rate']:.1f} % ({100 * found['ci_low']:.1f} to "
+              f"{100 * found['ci_high']:.1f} %)")
 
 
 def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
