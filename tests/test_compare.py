@@ -96,6 +96,13 @@ def test_the_batch_says_the_success_rate_of_each_contender(batch):
                  f"  cascade, {planner}: 4 of 4, 100.0 % (51.0 to 100.0 %)",
                  f"  se3, {planner}: 0 of 4, 0.0 % (0.0 to 49.0 %)"):
         assert line in stdout.splitlines()
+    # the summary groups by them too: one group, and one heat-map panel, per pair
+    groups = json.loads((out / "summary.json").read_text())["groups"]
+    assert sorted((g["controller"], Path(g["planner"]).name) for g in groups) == [
+        ("cascade", planner), ("cascade", "rrtstar"), ("se3", planner), ("se3", "rrtstar")]
+    assert [g["successes"] for g in groups] == [4, 0, 4, 0]
+    page = (out / "summary.html").read_text()
+    assert f"{planner}, se3" in page
 
 
 def test_each_contender_has_its_wilson_interval_and_medians_of_its_rows(batch):
