@@ -20,7 +20,7 @@ from figurecheck import assert_labels_apart, assert_texts_off_other_axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from PIL import Image
 
-from quadnav.batch.compare import holm
+from quadnav.batch.compare import holm, mcnemar, signed_rank
 from quadnav.batch.compare_page import leaderboard_figure
 from quadnav.batch.summary_page import breakable
 
@@ -176,6 +176,19 @@ def test_paired_differences_are_tested_by_mcnemar_and_signed_ranks_with_holm(bat
 def test_holm_adjusts_a_textbook_example():
     assert holm([0.01, 0.04, 0.03, 0.005]) == pytest.approx([0.03, 0.06, 0.06, 0.02])
     assert holm([0.5, 0.9]) == pytest.approx([1.0, 1.0])
+
+
+def test_mcnemar_counts_the_discordant_pairs_and_equal_pairs_carry_no_signed_rank():
+    first = [True, True, True, False, False, True, True]
+    second = [False, False, True, True, False, False, False]
+    found = mcnemar(first, second)
+    assert (found["a_only"], found["b_only"]) == (4, 1)
+    assert found["p"] == pytest.approx(_two_sided_binomial(4, 5)) == pytest.approx(12 / 32)
+    assert mcnemar([True, False], [True, False])["p"] == 1.0
+    assert signed_rank([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]) == 1.0
+    # five differences of one sign: the exact two-sided p-value 2 / 2^5
+    assert signed_rank([1.0, 2.0, 3.0, 4.0, 5.5], [0.5, 1.0, 1.0, 1.0, 1.0]) == pytest.approx(
+        2 / 2 ** 5)
 
 
 def test_the_page_and_figure_show_every_contender(batch):

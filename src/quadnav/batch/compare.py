@@ -207,7 +207,7 @@ def _pairs(by_key: dict[str, dict[str, Any]], other: dict[str, dict[str, Any]],
            value: Callable[[dict[str, Any]], Any]) -> tuple[list, list]:
     """The paired values of two contenders' rows (by pair key) where both have one."""
     a, b = [], []
-    for key in by_key.keys() & other.keys():
+    for key in sorted(by_key.keys() & other.keys()):
         x, y = value(by_key[key]), value(other[key])
         if x is not None and y is not None:
             a.append(x)
@@ -219,11 +219,11 @@ def compare(rows: Sequence[dict[str, Any]], by: Sequence[str]) -> dict[str, Any]
     """The leaderboard of ``rows`` by the axes ``by`` (at least two contenders): the
     contenders, best first (by success rate, then the low end of its interval, then name),
     and every comparison of two of them (see the module's docstring)."""
+    grouped = contender_rows(rows, by)
     members = {name: {_pair_key(row, by): row for row in group}
-               for name, group in contender_rows(rows, by).items()}
+               for name, group in grouped.items()}
     contenders = []
-    for name, paired in members.items():
-        group = list(paired.values())
+    for name, group in grouped.items():
         contenders.append({"contender": name, **rate(group)} | {
             metric.name: _spread([v for r in group if (v := metric.value(r)) is not None])
             for metric in METRICS})
