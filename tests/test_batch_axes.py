@@ -131,6 +131,7 @@ def test_a_contender_that_raises_while_loading_shows_its_traceback_once(tmp_path
     (["--wind", "1", "2"], "--wind: expected three forces FX FY FZ (N) or one wind model's spec, got 1 2"),
     (["--wind", "0", "0", "0", "nope.py:Wind"], "--wind: expected three forces FX FY FZ"),
     (["--reference", "nowhere.py:Traj"], "the command line: references: | nowhere.py"),
+    (["--planner", "rrtstar", "--compare"], "--compare: the batch has a single contender (one controller, planner, method or reference, wind and gains)"),
 ])
 def test_bad_contender_flags_are_one_line_and_nothing_is_written(tmp_path, args, message):
     result = run_here("batch", WINDOW, *args, "-o", tmp_path / "out", cwd=tmp_path)

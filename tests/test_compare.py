@@ -173,6 +173,20 @@ def test_paired_differences_are_tested_by_mcnemar_and_signed_ranks_with_holm(bat
             "cascade better (p 0.0078, Holm 0.047)") in stdout.splitlines()
 
 
+def test_batch_compare_draws_the_same_leaderboard_once_the_batch_is_done(batch):
+    out, _ = batch
+    result, _, stdout = _compare(out)
+    (out / "compare.json").unlink()
+
+    again = run_here("batch", out.parent / "spec.toml", "--quiet", "--compare", "-o", out)
+
+    assert again.returncode == 0, again.stderr
+    lines = again.stdout.splitlines()
+    assert lines[0] == f"16 missions, all already in {out}"
+    assert lines[-len(stdout.splitlines()):] == stdout.splitlines()
+    assert json.loads((out / "compare.json").read_text())["contenders"] == result["contenders"]
+
+
 def test_holm_adjusts_a_textbook_example():
     assert holm([0.01, 0.04, 0.03, 0.005]) == pytest.approx([0.03, 0.06, 0.06, 0.02])
     assert holm([0.5, 0.9]) == pytest.approx([1.0, 1.0])

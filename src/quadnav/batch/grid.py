@@ -241,6 +241,15 @@ class BatchSpec:
             [(method, None) for method in self.methods] if reference == NO_REFERENCE
             else [(None, reference)])]
 
+    @property
+    def contender_keys(self) -> list[str]:
+        """The lists of contenders that hold more than one: of ``controllers``,
+        ``planners``, ``methods`` with ``references`` (as ``references``), ``winds`` and
+        ``gains``."""
+        lists = {"controllers": self.controllers, "planners": self.planners,
+                 "references": self.trajectories, "winds": self.winds, "gains": self.gains}
+        return [key for key, values in lists.items() if len(values) > 1]
+
     def missions(self) -> list[MissionSpec]:
         """Every mission, in a fixed order: map, speed, wind, gusts, spread, planner,
         gains, controller, trajectory, then seed (innermost)."""

@@ -30,6 +30,7 @@ from quadnav.cli.args import (
     workers_description,
 )
 from quadnav.cli.commands import command_help
+from quadnav.cli.compare_command import leaderboard
 from quadnav.cli.flight_args import force_or_spec, wind_arguments
 from quadnav.cli.launch import interrupted_exit_code
 from quadnav.cli.progress import terminal_bar
@@ -121,6 +122,10 @@ class _Progress:
 def batch(args: argparse.Namespace) -> int:
     """Run the batch; exit 0 once every mission has a row, whatever the success rate."""
     spec = batch_spec(args)
+    if args.compare and not spec.contender_keys:
+        raise QuadnavError("--compare: the batch has a single contender (one controller, "
+                           "planner, method or reference, wind and gains); expected two or "
+                           "more of one of them")
     folder = check_output_folder(args.output)
     run = BatchRun(spec, folder, restart=args.restart)
     done_before = len(run.rows)
@@ -151,6 +156,8 @@ def batch(args: argparse.Namespace) -> int:
     _print_contenders(run.finished, folder)
     print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
     print("wrote " + ", ".join(str(folder / name) for name in written))
+    if args.compare:
+        leaderboard(folder, run.finished, None)
     return 0
 
 
@@ -216,6 +223,9 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                         "wind class's spec (as in fly); repeat it for more: --wind 0 0 0 "
                         "--wind 0.02 0 0 --wind my_wind.py:Gust (default: no wind)")
     add_executor_arguments(p)
+    p.add_argument("--compare", action="store_true",
+                   help="then print and write the leaderboard of its contenders, as quadnav "
+                        "compare DIR does (refused up front for a batch of one contender)")
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -37,8 +37,14 @@ def compare_batch(args: argparse.Namespace) -> int:
     """Print the leaderboard and write compare.csv, .json, .html and .png into the batch
     folder."""
     folder = Path(args.folder)
-    rows = _rows(folder)
-    by = chosen_axes(rows, args.by, folder)
+    leaderboard(folder, _rows(folder), args.by)
+    return 0
+
+
+def leaderboard(folder: Path, rows: list[dict], by: list[str] | None) -> None:
+    """Print the leaderboard of the batch ``rows`` in ``folder`` by the axes ``by`` (None:
+    those that vary) and write compare.csv, .json, .html and .png there."""
+    by = chosen_axes(rows, by, folder)
     result = compare(rows, by)
     contenders = result["contenders"]
     print(f"compared by {', '.join(by)}: {len(contenders)} contenders, {len(rows)} missions; "
@@ -54,7 +60,6 @@ def compare_batch(args: argparse.Namespace) -> int:
               f"{c['p_holm']:.2g})")
     written = [*write_tables(result, folder), *write_compare_page(result, folder)]
     print("wrote " + ", ".join(str(folder / name) for name in written))
-    return 0
 
 
 def add_compare_command(subparsers: argparse._SubParsersAction) -> None:
