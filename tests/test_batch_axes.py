@@ -55,6 +55,42 @@ def test_a_spec_lists_every_kind_of_contender_and_each_mission_flies_its_own():
     assert config["disturbances"]["wind"] == [0.0, 0.0, 0.0]
 
 
+def test_a_mission_of_four_plugins_flies_in_a_worker_and_refly_flies_it_again(tmp_path):
+    # a plain-Python controller, planner, trajectory class and wind in one mission, flown by
+    # a spawned worker that loads each from the spec's text; the batch.json of a grid
+    # without the methods (its references all classes) reads back, so refly flies the row
+    spec = {"maps": [WINDOW], "seeds": 1, "speeds": [2.0], "control_rate": 200.0,
+            "controllers": ["plain_controller.py:PDAttitude"],
+            "planners": ["plain_planner.py:graph_search(resolution=0.5)"],
+            "references": ["plain_trajectory.py:StopAndGo(speed=1.5)"],
+            "winds": ["plain_wind.py:GustFront(speed=1.0)"]}
+    parsed = parse_spec(spec, EXAMPLES)
+    assert parse_spec(parsed.table(), "/elsewhere") == parsed
+    lines = [f"{key} = {json.dumps(value)}" for key, value in spec.items()]
+    (tmp_path / "spec.toml").write_text("\n".join(lines) + "\n")
+    for name in ("plain_controller.py", "plain_planner.py", "plain_trajectory.py",
+                 "plain_wind.py"):
+        shutil.copy(EXAMPLES / name, tmp_path)
+
+    result = run_here("batch", tmp_path / "spec.toml", "--workers", "1", "--quiet",
+                      "-o", tmp_path / "out")
+
+    assert result.returncode == 0, result.stderr
+    row, = read_rows(tmp_path / "out" / "results.csv")
+    assert row["success"] and row["error"] is None
+    assert (row["controller"], row["planner"], row["method"], row["reference"],
+            row["wind_model"]) == (
+        f"{tmp_path}/plain_controller.py:PDAttitude",
+        f"{tmp_path}/plain_planner.py:graph_search(resolution=0.5)", None,
+        f"{tmp_path}/plain_trajectory.py:StopAndGo(speed=1.5)",
+        f"{tmp_path}/plain_wind.py:GustFront(speed=1.0)")
+    again = run_here("refly", tmp_path / "out", "1", "--no-figures", "-o", tmp_path / "again")
+    assert again.returncode == 0, again.stderr
+    metrics = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    for key in ("rms_tracking_error_m", "flight_margin_m", "rotor_energy_j", "path_length_m"):
+        assert metrics[key] == row[key], key
+
+
 def test_the_default_contenders_keep_the_mission_keys_of_earlier_batch_folders():
     plain = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max"]}, ".")
     named = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max"],

@@ -270,7 +270,9 @@ class BatchSpec:
 
     def table(self) -> dict[str, Any]:
         """The spec as a TOML-like table with every path resolved and every default filled
-        in; :func:`parse_spec` reads it back to this spec."""
+        in (but the methods when no mission flies one); :func:`parse_spec` reads it back to
+        this spec."""
+        methods = {"methods": list(self.methods)} if NO_REFERENCE in self.references else {}
         maps = [{key: list(value) if isinstance(value, tuple) else value
                  for key, value in entry.__dict__.items() if value is not None}
                 for entry in self.maps]
@@ -281,8 +283,9 @@ class BatchSpec:
             "gusts": list(self.gusts),
             "spreads": [s.__dict__ for s in self.spreads], "planners": list(self.planners),
             "gains": list(self.gains), "controllers": list(self.controllers),
-            "methods": list(self.methods), "references": list(self.references),
-        } | {key: value for key, value in self.fixed.__dict__.items() if value is not None}
+            "references": list(self.references),
+        } | methods | {key: value for key, value in self.fixed.__dict__.items()
+                       if value is not None}
 
 
 class _Source:
