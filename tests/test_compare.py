@@ -20,9 +20,10 @@ from figurecheck import assert_labels_apart, assert_texts_off_other_axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from PIL import Image
 
-from quadnav.batch.compare import holm, mcnemar, signed_rank
+from quadnav.batch.compare import compare, holm, mcnemar, signed_rank
 from quadnav.batch.compare_page import leaderboard_figure
 from quadnav.batch.summary_page import breakable
+from quadnav.batch.table import read_rows
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 PLANNER = "plain_planner.py:graph_search(resolution=0.5)"
@@ -185,6 +186,20 @@ def test_batch_compare_draws_the_same_leaderboard_once_the_batch_is_done(batch):
     assert lines[0] == f"16 missions, all already in {out}"
     assert lines[-len(stdout.splitlines()):] == stdout.splitlines()
     assert json.loads((out / "compare.json").read_text())["contenders"] == result["contenders"]
+
+
+def test_two_plugins_of_files_with_the_same_name_are_two_contenders_named_in_full(batch):
+    out, _ = batch
+    rows = read_rows(out / "results.csv")
+    for row in rows:  # the same file name in two folders
+        if row["planner"] != "rrtstar":
+            row["planner"] = f"/a/{PLANNER}" if row["seed"] % 2 else f"/b/{PLANNER}"
+
+    result = compare(rows, ["planner"])
+
+    # each at a rate of one half, the one of 8 missions first (its interval is narrower)
+    assert [(c["contender"], c["n"], c["successes"]) for c in result["contenders"]] == [
+        ("rrtstar", 8, 4), (f"/a/{PLANNER}", 4, 2), (f"/b/{PLANNER}", 4, 2)]
 
 
 def test_holm_adjusts_a_textbook_example():

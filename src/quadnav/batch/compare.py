@@ -102,13 +102,15 @@ def short_spec(text: str) -> str:
     return text
 
 
-def _value_label(axis: str, row: dict[str, Any]) -> str:
-    """The value of ``axis`` in ``row`` as shown."""
+def _value_label(axis: str, row: dict[str, Any], short: bool = True) -> str:
+    """The value of ``axis`` in ``row`` as shown: a plug-in file or gains file by its name
+    (``short``) or in full."""
+    shown = short_spec if short else str
     if axis in ("method", "reference"):
-        return short_spec(row["reference"]) if row["reference"] else row["method"]
+        return shown(row["reference"]) if row["reference"] else row["method"]
     if axis == "wind":
         if row["wind_model"]:
-            return short_spec(row["wind_model"])
+            return shown(row["wind_model"])
         return "wind (" + ", ".join(f"{row[f'wind_{a}']:g}" for a in XYZ) + ") N"
     if axis == "speed":
         return "max speed" if row["speed"] is None else f"{row['speed']:g} m/s"
@@ -116,7 +118,7 @@ def _value_label(axis: str, row: dict[str, Any]) -> str:
         return f"gusts {row['gusts']:g} N"
     if axis == "spread":
         return f"spread {row['spread']}"
-    return short_spec(str(row[axis]))
+    return shown(str(row[axis]))
 
 
 def varying_axes(rows: Sequence[dict[str, Any]], axes: Sequence[str] = CONTENDER_AXES
@@ -135,18 +137,24 @@ def varying_axes(rows: Sequence[dict[str, Any]], axes: Sequence[str] = CONTENDER
     return found
 
 
-def contender_of(row: dict[str, Any], by: Sequence[str]) -> str:
-    """The contender flying ``row``: its values of the axes ``by``, joined."""
-    return ", ".join(dict.fromkeys(_value_label(axis, row) for axis in by))
+def contender_of(row: dict[str, Any], by: Sequence[str], short: bool = True) -> str:
+    """The contender flying ``row``: its values of the axes ``by``, joined (files by their
+    names when ``short``)."""
+    return ", ".join(dict.fromkeys(_value_label(axis, row, short) for axis in by))
 
 
 def contender_rows(rows: Sequence[dict[str, Any]], by: Sequence[str]
                    ) -> dict[str, list[dict[str, Any]]]:
-    """``rows`` by the contender flying each (:func:`contender_of`), in their order."""
-    found: dict[str, list[dict[str, Any]]] = {}
+    """``rows`` by the contender flying each, in their order, each named by
+    :func:`contender_of`: files by their names, or by their whole paths when two
+    contenders' files have the same name."""
+    found: dict[tuple, list[dict[str, Any]]] = {}
     for row in rows:
-        found.setdefault(contender_of(row, by), []).append(row)
-    return found
+        found.setdefault(tuple(row[c] for axis in by for c in AXES[axis]), []).append(row)
+    names = [contender_of(group[0], by) for group in found.values()]
+    if len(set(names)) < len(names):
+        names = [contender_of(group[0], by, short=False) for group in found.values()]
+    return dict(zip(names, found.values(), strict=True))
 
 
 def _pair_key(row: dict[str, Any], by: Sequence[str]) -> str:
