@@ -139,6 +139,8 @@ def test_paired_differences_are_tested_by_mcnemar_and_signed_ranks_with_holm(bat
 
     rows = _rows(out)
     assert [e["contender"] for e in table] == ["cascade", "se3"]
+    assert [c["values"] for c in result["contenders"]] == [{"controller": "cascade"},
+                                                           {"controller": "se3"}]
     # pairs: the same planner and seed, the controller differing
     by_pair = {}
     for row in rows:

@@ -232,7 +232,8 @@ def compare(rows: Sequence[dict[str, Any]], by: Sequence[str]) -> dict[str, Any]
                for name, group in grouped.items()}
     contenders = []
     for name, group in grouped.items():
-        contenders.append({"contender": name, **rate(group)} | {
+        values = {column: group[0][column] for axis in by for column in AXES[axis]}
+        contenders.append({"contender": name, "values": values, **rate(group)} | {
             metric.name: _spread([v for r in group if (v := metric.value(r)) is not None])
             for metric in METRICS})
     contenders.sort(key=lambda c: (-c["success_rate"], -c["ci_low"], c["contender"]))
