@@ -279,6 +279,17 @@ def test_a_folder_that_is_not_a_batch_is_refused(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
+def test_a_batch_without_a_finished_mission_is_refused(batch, tmp_path):
+    out, _ = batch
+    (tmp_path / "batch.json").write_bytes((out / "batch.json").read_bytes())
+    assert_user_error(run_here("compare", tmp_path),
+                      f"{tmp_path}: the batch has no finished mission yet; run it first")
+    (tmp_path / "results.csv").write_text((out / "results.csv").read_text().splitlines()[0]
+                                          + "\n")
+    assert_user_error(run_here("compare", tmp_path),
+                      f"{tmp_path}: the batch has no finished mission yet; run it first")
+
+
 def test_a_batch_with_a_single_contender_or_an_axis_that_does_not_vary_is_refused(batch,
                                                                                   tmp_path):
     out, _ = batch

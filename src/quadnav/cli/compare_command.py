@@ -10,6 +10,7 @@ from quadnav.batch.compare import ALPHA, AXES, compare, write_tables
 from quadnav.batch.compare import choose_axes as chosen_axes
 from quadnav.batch.compare_page import comparison_text, leaderboard_rows, write_compare_page
 from quadnav.batch.folder import BATCH_JSON, batch_rows
+from quadnav.batch.table import RESULTS_CSV
 from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 
@@ -20,7 +21,7 @@ def _rows(folder: Path) -> list[dict]:
     if not (folder / BATCH_JSON).is_file():
         raise QuadnavError(f"{folder}: not a quadnav batch folder (no {BATCH_JSON}); expected "
                            "the -o DIR of quadnav batch")
-    rows = batch_rows(folder)
+    rows = batch_rows(folder) if (folder / RESULTS_CSV).is_file() else []
     if not rows:
         raise QuadnavError(f"{folder}: the batch has no finished mission yet; run it first")
     return rows
