@@ -183,8 +183,10 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                     "and DIR/results.csv (one row per mission), DIR/summary.json (success rate "
                     "per group with Wilson 95 % intervals) and DIR/summary.html. Give maps and "
                     "flags for the simple case, or one TOML spec for the full grid (see the "
-                    "README). A re-run into the same DIR skips the missions already done; "
-                    "Ctrl-C keeps every finished row. Exit 0 when every mission has a row, 2 on "
+                    "README); several controllers, planners, methods, references or winds "
+                    "are contenders, ranked by quadnav compare DIR (or --compare). A re-run "
+                    "into the same DIR skips the missions already done; Ctrl-C keeps every "
+                    "finished row. Exit 0 when every mission has a row, 2 on "
                     "bad input, 130/143 when stopped.")
     p.add_argument("inputs", nargs="+", metavar="MAP|SPEC.toml",
                    help="map files or built-in world specs, or one TOML spec")
