@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import html
 import math
-import re
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ from matplotlib.figure import Figure
 
 from quadnav import __version__
 from quadnav.batch.compare import ALPHA, METRIC_NOTES, METRICS
-from quadnav.batch.summary_page import breakable
+from quadnav.batch.summary_page import breakable, wrapped
 from quadnav.files import atomic_output
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
 from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
@@ -65,18 +64,6 @@ def leaderboard_figure(result: dict[str, Any]) -> Figure:
     fig.suptitle(f"{len(contenders)} contenders by {', '.join(result['by'])}",
                  fontsize=TITLE_FONT)
     return fig
-
-
-def wrapped(text: str, width: int) -> str:
-    """``text`` in lines of at most ``width`` characters where it can be, each broken only
-    after a space, ``,``, ``/``, ``:`` or ``(`` (a word or a number is never cut)."""
-    lines = [""]
-    for piece in re.split(r"(?<=[ ,/:(])", text):
-        if lines[-1] and len(lines[-1]) + len(piece.rstrip()) > width:
-            lines[-1] = lines[-1].rstrip()
-            lines.append("")
-        lines[-1] += piece
-    return "\n".join(line.rstrip() for line in lines)
 
 
 def _bars(ax: Any, positions: np.ndarray, values: list[tuple[Any, Any, Any]], title: str,

@@ -61,6 +61,8 @@ CELL_INCHES = 0.9
 PANEL_GAP_INCHES = 0.3
 #: Inches of the colour bar beside the heat maps, with its labels.
 COLORBAR_INCHES = 1.0
+#: Inches a character of a panel's title takes, about (wider than most).
+TITLE_INCHES_PER_CHARACTER = 0.65 * TITLE_FONT / 72
 #: Inches of one row of a heat map, and of a line of panels beyond its rows (title, ticks).
 ROW_INCHES = 0.42
 PANEL_INCHES = 0.8
@@ -163,6 +165,18 @@ class _Groups:
         return ", ".join(parts + ([panel] if panel else []))
 
 
+def wrapped(text: str, width: int) -> str:
+    """``text`` in lines of at most ``width`` characters where it can be, each broken only
+    after a space, ``,``, ``/``, ``:`` or ``(`` (a word or a number is never cut)."""
+    lines = [""]
+    for piece in re.split(r"(?<=[ ,/:(])", text):
+        if lines[-1] and len(lines[-1]) + len(piece.rstrip()) > width:
+            lines[-1] = lines[-1].rstrip()
+            lines.append("")
+        lines[-1] += piece
+    return "\n".join(line.rstrip() for line in lines)
+
+
 def json_key(value: Any) -> str:
     """A hashable text of a JSON value."""
     return repr(value)
@@ -193,6 +207,8 @@ def heat_map(labels: _Groups) -> tuple[Figure, dict[Text, str]]:
     width = max(WIDTH, label_width + panel_width + COLORBAR_INCHES)  # wider for many speeds
     columns = max(1, min(len(panels), int((width - label_width - COLORBAR_INCHES)
                                           // panel_width)))
+    title_width = int(((width - label_width - COLORBAR_INCHES) / columns - PANEL_GAP_INCHES)
+                      / TITLE_INCHES_PER_CHARACTER)
     lines = math.ceil(len(panels) / columns)
     fig = Figure(figsize=(width, lines * (PANEL_INCHES + ROW_INCHES * len(rows)) + 0.6),
                  dpi=DPI, layout="constrained")
@@ -216,7 +232,7 @@ def heat_map(labels: _Groups) -> tuple[Figure, dict[Text, str]]:
             drawn |= {text: full[text.get_text()] for text in ax.get_yticklabels()}
         ax.tick_params(length=0)
         if title:
-            ax.set_title(title, fontsize=TITLE_FONT)
+            ax.set_title(wrapped(title, title_width), fontsize=TITLE_FONT)
     for ax in axes[len(panels):]:
         ax.set_visible(False)
     bar = fig.colorbar(image, ax=axes[:len(panels)].tolist(), shrink=0.8, pad=0.02)
