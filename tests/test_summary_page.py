@@ -75,6 +75,25 @@ def test_long_map_names_fit_the_heat_map_without_a_warning(planners, speeds):
     assert set(shown.values()) == set(LONG_NAMES)
 
 
+def test_long_plugin_specs_title_their_panels_within_them():
+    # planners of your own, by file and arguments: each panel's title is wrapped to its width
+    planners = ("/home/student/p1/my_planners.py:graph_search(resolution=0.25)",
+                "/home/student/p1/my_planners.py:probabilistic_roadmap(samples=500)",
+                "rrtstar")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig, _ = heat_map(_labels(["maps/a.txt", "maps/b.txt"], planners))
+        FigureCanvasAgg(fig)
+        assert_texts_off_other_axes(fig)
+    renderer = fig.canvas.get_renderer()
+    for ax in (ax for ax in fig.axes if ax.get_title()):
+        box = ax.title.get_window_extent(renderer)
+        assert ax.bbox.x0 - 1 <= box.x0 and box.x1 <= ax.bbox.x1 + 1, ax.get_title()
+    assert [ax.get_title() for ax in fig.axes if ax.get_title()][:2] == [
+        "my_planners.py:\ngraph_search(\nresolution=0.25)",
+        "my_planners.py:\nprobabilistic_roadmap(\nsamples=500)"]
+
+
 def test_the_heat_map_grows_with_the_maps_and_keeps_its_cells_readable():
     heights = []
     for count in (2, 13, 40):

@@ -5,7 +5,9 @@ Each mission is a :class:`~quadnav.missionconfig.MissionConfig` (:func:`mission_
 built as every command builds one. Everything a mission reads from files (maps, gains,
 the vehicle) is loaded once by the parent into a :class:`BatchContext`
 (:func:`load_context`) and sent to the workers, so a worker on another machine needs no
-file of the driver's. A mission depends only on its spec and the context: the planner's
+file of the driver's but the plug-ins' (controllers, planners, references, winds named
+``path/to/file.py:Name``), which each worker loads from the spec's text, by the file's
+absolute path. A mission depends only on its spec and the context: the planner's
 budget binds by samples, and the gusts, the vehicle spread and a start and goal drawn for
 a map without its own all come from the seed.
 """
@@ -14,7 +16,9 @@ from __future__ import annotations
 
 import hashlib
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
+from itertools import product
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,7 +26,7 @@ import numpy as np
 from quadnav.batch.grid import DEFAULT_GAINS, BatchSpec, FixedSettings, MissionSpec
 from quadnav.batch.table import mission_row
 from quadnav.config import as_plain
-from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains
+from quadnav.control.registry import controller_gains
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.mission import Mission, MissionSettings, fly_problem
 from quadnav.missionconfig import MissionConfig, MissionFiles, spread_factors, vehicle_from
@@ -50,24 +54,32 @@ class BatchContext:
         fixed: the settings every mission shares.
         vehicle: the nominal vehicle (``fixed.vehicle`` loaded).
         worlds: each map of the grid by its name (:attr:`MapEntry.map`).
-        gains: each gains entry of the grid loaded, by its name.
+        gains: the gains of each controller and gains entry of the grid, loaded, by
+            (controller, entry).
+        plugins: a hash of each plug-in file the grid names, by its absolute path.
     """
 
     fixed: FixedSettings
     vehicle: VehicleParams
     worlds: dict[str, World]
-    gains: dict[str, Any]
+    gains: dict[tuple[str, str], Any]
+    plugins: dict[str, str] = field(default_factory=dict)
 
     def fingerprint(self) -> dict:
-        """What the files gave, JSON-ready: the vehicle, the gains and a hash of each map,
-        so a batch folder can tell when a file changed under it."""
-        return {"vehicle": as_plain(self.vehicle),
-                "gains": {name: as_plain(gains) for name, gains in self.gains.items()},
-                "maps": {name: _world_hash(world) for name, world in self.worlds.items()}}
+        """What the files gave, JSON-ready: the vehicle, the gains of each controller, a
+        hash of each map and (when the grid names any) of each plug-in file, so a batch
+        folder can tell when a file changed under it."""
+        gains: dict[str, dict[str, Any]] = {}
+        for (controller, name), values in self.gains.items():
+            gains.setdefault(controller, {})[name] = as_plain(values)
+        plugins = {"plugins": dict(self.plugins)} if self.plugins else {}
+        return {"vehicle": as_plain(self.vehicle), "gains": gains,
+                "maps": {name: _world_hash(world) for name, world in self.worlds.items()}
+                } | plugins
 
     def files(self, mission: MissionSpec) -> MissionFiles:
         """The vehicle and gains ``mission`` flies with, as loaded."""
-        return MissionFiles(self.vehicle, self.gains[mission.gains])
+        return MissionFiles(self.vehicle, self.gains[mission.controller, mission.gains])
 
 
 def _world_hash(world: World) -> str:
@@ -77,40 +89,73 @@ def _world_hash(world: World) -> str:
     return digest.hexdigest()[:16]
 
 
+def plugin_files(spec: BatchSpec) -> dict[str, str]:
+    """A hash of each plug-in file the grid of ``spec`` names (``path/to/file.py:Name``,
+    the path resolved), by its path."""
+    texts = (*spec.controllers, *spec.planners, *spec.references,
+             *(wind for wind in spec.winds if isinstance(wind, str)))
+    paths = sorted({where for where, colon, _ in (text.partition(":") for text in texts)
+                    if colon and where.endswith(".py")})
+    return {path: hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16] for path in paths}
+
+
+def _gains(spec: BatchSpec, vehicle: VehicleParams) -> dict[tuple[str, str], Any]:
+    """The gains of every controller and gains entry of ``spec`` flying ``vehicle``;
+    QuadnavError naming both for a pair that does not fit (a gains file of the cascade
+    for a controller without gains, say)."""
+    gains = {}
+    for controller, name in product(spec.controllers, spec.gains):
+        try:
+            gains[controller, name] = controller_gains(
+                controller, vehicle, None if name == DEFAULT_GAINS else name)
+        except QuadnavError as error:
+            if len(spec.controllers) == 1:
+                raise
+            raise QuadnavError(f"controllers {controller} with gains {name}: {error}"
+                               ) from None
+    return gains
+
+
 def load_context(spec: BatchSpec) -> BatchContext:
-    """Load the vehicle, maps and gains of ``spec``; QuadnavError for a bad file or a
-    setting out of range, before any mission flies."""
+    """Load the vehicle, maps, gains and plug-in files of ``spec``; QuadnavError for a bad
+    file or a setting out of range, before any mission flies."""
     vehicle = vehicle_from(spec.fixed.vehicle)
     worlds = {entry.map: load_world(entry.map) for entry in spec.maps}
-    gains = {name: controller_gains(DEFAULT_CONTROLLER, vehicle,
-                                    None if name == DEFAULT_GAINS else name)
-             for name in spec.gains}
-    context = BatchContext(spec.fixed, vehicle, worlds, gains)
-    for mission in spec.missions()[:1]:  # every mission's settings are checked alike
-        mission_settings(context, mission)
+    context = BatchContext(spec.fixed, vehicle, worlds, _gains(spec, vehicle),
+                           plugin_files(spec))
+    # the settings of each controller, gains, trajectory and wind, on the first mission
+    first = spec.missions()[0]
+    for controller, gains, (method, reference), wind in product(
+            spec.controllers, spec.gains, spec.trajectories, spec.winds):
+        mission_settings(context, replace(first, controller=controller, gains=gains,
+                                          method=method, reference=reference, wind=wind))
     return context
 
 
 def mission_config(fixed: FixedSettings, mission: MissionSpec) -> MissionConfig:
     """The mission ``mission`` of a batch whose fixed settings are ``fixed``: its map
-    entry's query (its margin, else the batch's), its seed, speed, disturbances, planner
-    and gains, and the batch's vehicle, trajectory, budget and rates."""
+    entry's query (its margin, else the batch's), its seed, speed, disturbances, planner,
+    controller and gains, trajectory method or class, and the batch's vehicle, trajectory
+    timing, budget and rates."""
     entry = mission.map
     query = {"start": entry.start, "goal": entry.goal,
              "margin": fixed.margin if entry.margin is None else entry.margin}
-    gains = None if mission.gains == DEFAULT_GAINS else mission.gains
+    gains = {} if mission.gains == DEFAULT_GAINS else {"gains": mission.gains}
+    trajectory = ({"reference": mission.reference} if mission.reference is not None
+                  else {"method": mission.method})
+    wind = ({"wind_model": mission.wind} if isinstance(mission.wind, str)
+            else {"wind": mission.wind})
     return MissionConfig.from_table({
         "map": entry.map, "seed": mission.seed, "vehicle": fixed.vehicle,
         "query": {key: value for key, value in query.items() if value is not None},
         "planner": {"name": mission.planner, "time": fixed.time_cap,
                     "improve": fixed.improve},
-        "trajectory": {"method": fixed.method, "timing": fixed.timing,
-                       "speed": mission.speed, "accel": fixed.accel},
-        "controller": {} if gains is None else {"gains": gains},
+        "trajectory": trajectory | {"timing": fixed.timing, "speed": mission.speed,
+                                    "accel": fixed.accel},
+        "controller": {"name": mission.controller} | gains,
         "simulation": {"physics_rate": fixed.physics_rate,
                        "control_rate": fixed.control_rate, "settle": fixed.settle},
-        "disturbances": {"wind": mission.wind, "gusts": mission.gusts,
-                         "spread": mission.spread},
+        "disturbances": wind | {"gusts": mission.gusts, "spread": mission.spread},
     }, source="the batch spec")
 
 

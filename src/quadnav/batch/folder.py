@@ -2,10 +2,15 @@
 outputs written from them.
 
 ``batch.json`` holds the spec with every path resolved and every default filled in, what
-its files gave (the vehicle, the gains, a hash of each map) and the table's columns. A
-re-run into the same folder must be the same batch: it then skips the missions already in
-the journal; any other batch is refused (or, with ``restart``, the folder's batch files
-are replaced).
+its files gave (the vehicle, the gains, a hash of each map and plug-in file) and the
+table's columns. A re-run into the same folder must be the same batch: it then skips the
+missions already in the journal; any other batch is refused (or, with ``restart``, the
+folder's batch files are replaced).
+
+A folder written before controllers, methods, references and wind classes were values of
+the grid (:data:`~quadnav.batch.table.EARLIER_NAMES`) is the same batch as the one its
+spec now reads as (:func:`current_record`): it resumes, and its ``batch.json`` and
+``results.csv`` are then rewritten in today's form (:func:`begin`).
 """
 
 from __future__ import annotations
@@ -16,10 +21,19 @@ from pathlib import Path
 from typing import Any
 
 from quadnav.batch.fly_one import BatchContext
-from quadnav.batch.grid import BatchSpec, MissionSpec, parse_spec
+from quadnav.batch.grid import NO_REFERENCE, BatchSpec, MissionSpec, parse_spec
 from quadnav.batch.summary import SUMMARY_JSON, summary, write_summary
 from quadnav.batch.summary_page import SUMMARY_HTML, write_summary_page
-from quadnav.batch.table import NAMES, RESULTS_CSV, RESULTS_PARQUET, read_rows, write_tables
+from quadnav.batch.table import (
+    EARLIER_NAMES,
+    NAMES,
+    RESULTS_CSV,
+    RESULTS_PARQUET,
+    read_rows,
+    write_csv,
+    write_tables,
+)
+from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
 
@@ -65,15 +79,38 @@ def read_record(folder: Path) -> dict[str, Any]:
     return record
 
 
+def current_record(record: dict[str, Any]) -> dict[str, Any]:
+    """``record`` as written today: one written before controllers, methods, references
+    and wind classes were values of the grid (its columns :data:`EARLIER_NAMES`) had one
+    ``method``, flew the default controller with no reference, and kept the gains of that
+    controller alone; any other record as it is."""
+    if record.get("columns") != list(EARLIER_NAMES):
+        return record
+    spec = dict(record["spec"])
+    spec["methods"] = [spec.pop("method")]
+    spec |= {"controllers": [DEFAULT_CONTROLLER], "references": [NO_REFERENCE]}
+    files = dict(record["files"])
+    files["gains"] = {DEFAULT_CONTROLLER: files["gains"]}
+    return {"spec": spec, "files": files, "columns": list(NAMES)}
+
+
 def recorded_spec(folder: Path) -> BatchSpec:
     """The spec of the batch in ``folder`` (from batch.json)."""
-    return parse_spec(read_record(folder)["spec"], folder, str(folder / BATCH_JSON))
+    return parse_spec(current_record(read_record(folder))["spec"], folder,
+                      str(folder / BATCH_JSON))
 
 
-def finished_rows(folder: Path, record: dict[str, Any], restart: bool
-                  ) -> list[dict[str, Any]]:
-    """The rows already finished in ``folder`` for the batch of ``record`` (none for a new
-    folder, or with ``restart``). Writes nothing.
+def batch_rows(folder: Path, spec: BatchSpec | None = None) -> list[dict[str, Any]]:
+    """The rows finished in the batch ``folder`` (its spec ``spec``, None: read from
+    batch.json), as today's table has them (:func:`~quadnav.batch.table.read_rows`)."""
+    spec = recorded_spec(folder) if spec is None else spec
+    return read_rows(folder / RESULTS_CSV, spec.missions())
+
+
+def finished_rows(folder: Path, record: dict[str, Any], missions: Sequence[MissionSpec],
+                  restart: bool) -> list[dict[str, Any]]:
+    """The rows already finished in ``folder`` for the batch of ``record`` and its
+    ``missions`` (none for a new folder, or with ``restart``). Writes nothing.
 
     Raises:
         QuadnavError: ``folder`` holds another batch (and not ``restart``), or its journal
@@ -81,25 +118,33 @@ def finished_rows(folder: Path, record: dict[str, Any], restart: bool
     """
     if restart or not ((folder / BATCH_JSON).exists() or (folder / RESULTS_CSV).exists()):
         return []
-    old = read_record(folder) if (folder / BATCH_JSON).exists() else {}
+    old = current_record(read_record(folder)) if (folder / BATCH_JSON).exists() else {}
     if old != record:
         raise QuadnavError(
             f"{folder}: holds another batch ({_difference(old, record)}); run the same batch "
             "again to resume it, or use another -o DIR, or --restart to start over")
-    return read_rows(folder / RESULTS_CSV) if (folder / RESULTS_CSV).exists() else []
+    if not (folder / RESULTS_CSV).exists():
+        return []
+    return read_rows(folder / RESULTS_CSV, missions)
 
 
-def begin(folder: Path, record: dict[str, Any], restart: bool) -> None:
-    """Make ``folder`` (created if needed) hold the batch of ``record``: with ``restart``,
-    the files of the batch it held are removed first; ``batch.json`` is written unless it
-    is there (checked by :func:`finished_rows`)."""
+def begin(folder: Path, record: dict[str, Any], restart: bool,
+          rows: Sequence[dict[str, Any]]) -> None:
+    """Make ``folder`` (created if needed) hold the batch of ``record``, whose finished
+    ``rows`` it holds (:func:`finished_rows`): with ``restart``, the files of the batch it
+    held are removed first; ``batch.json`` is written unless it is there, and with
+    ``results.csv`` written again in today's form when the folder was written before
+    (:func:`current_record`)."""
     folder.mkdir(parents=True, exist_ok=True)
     if restart:
         for name in BATCH_FILES:
             (folder / name).unlink(missing_ok=True)
-    if not (folder / BATCH_JSON).exists():
-        with atomic_output(folder / BATCH_JSON) as tmp:
-            tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    if (folder / BATCH_JSON).exists() and read_record(folder) == record:
+        return
+    if (folder / RESULTS_CSV).exists():
+        write_csv(rows, folder / RESULTS_CSV)
+    with atomic_output(folder / BATCH_JSON) as tmp:
+        tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
 
 
 def ordered_rows(missions: Sequence[MissionSpec], rows: dict[str, dict[str, Any]]

@@ -6,12 +6,19 @@ A spec is a table (see the README's ``quadnav batch`` section)::
     seeds = 50                       # or a list [0, 1, 5]
     speeds = [1.0, 2.0]              # m/s, or "max"
     maps = ["forest", "map.json", {map = "map1.txt", start = [0.1, -4.9, 0.2], goal = [8, 18, 3]}]
-    winds = [[0, 0, 0]]              # steady forces, N        (grid; these are the defaults)
+    winds = [[0, 0, 0]]              # steady forces, N, or wind classes (grid; defaults)
     gusts = [0.0]                    # gust std, N
     spreads = [0.0]                  # vehicle spread fractions
-    planners = ["rrtstar"]
+    planners = ["rrtstar"]           # names or plug-in specs
     gains = ["default"]              # or gain files
+    controllers = ["cascade"]        # names or plug-in specs
+    methods = ["minsnap"]            # trajectory methods (or method = "minsnap")
+    references = ["none"]            # "none" (the methods) or trajectory classes
     accel = 3.0                      # fixed settings, see FIXED_KEYS
+
+Plug-ins are named as everywhere (:mod:`quadnav.plugins`): a registered name,
+``module:Name`` or ``path/to/file.py:Name(key=value, ...)``, a file's path resolved here, so
+that the spec string alone (it travels to every worker, on Ray too) names the plug-in.
 
 Every value is checked against its stated range; every mistake is one
 :class:`~quadnav.errors.QuadnavError` naming the spec and, where it can be found, the line.
@@ -35,6 +42,7 @@ from typing import Any
 
 from quadnav.config import read_toml
 from quadnav.control.gains import course_gain_names
+from quadnav.control.registry import DEFAULT_CONTROLLER, controller_class
 from quadnav.errors import MapError, QuadnavError
 from quadnav.limits import (
     ACCELERATION,
@@ -57,10 +65,13 @@ from quadnav.limits import (
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
 from quadnav.missionconfig import SPREAD_PARTS, Spread
+from quadnav.missionconfig.checks import located
 from quadnav.planning import get_planner
 from quadnav.plugins import PluginError
 from quadnav.sim.settings import SimSettings
+from quadnav.sim.wind import wind_maker
 from quadnav.trajectory.generate import METHODS, TIMINGS
+from quadnav.trajectory.plain import load_trajectory_class
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names, vehicle_forms
 from quadnav.world import read_start_goal
 from quadnav.world.builtin import is_builtin_spec
@@ -75,9 +86,18 @@ MAX_MISSIONS = 1_000_000
 SEED_COUNT = Range(1, MAX_MISSIONS, whole=True)
 #: The gains of the vehicle, as a ``gains`` entry.
 DEFAULT_GAINS = "default"
+#: The trajectory method of a batch that names none.
+DEFAULT_METHOD = "minsnap"
+#: A ``references`` entry: no trajectory class of your own, but the trajectory stage with
+#: each of the batch's methods.
+NO_REFERENCE = "none"
 
 #: Keys of the grid, each a list of values.
-GRID_KEYS = ("maps", "seeds", "speeds", "winds", "gusts", "spreads", "planners", "gains")
+GRID_KEYS = ("maps", "seeds", "speeds", "winds", "gusts", "spreads", "planners", "gains",
+             "controllers", "methods", "references")
+#: A key that sets one trajectory method, as ``methods = [...]`` with one (a batch's
+#: spec before methods became a list of the grid).
+METHOD_KEY = "method"
 #: Keys of a map entry given as a table.
 MAP_KEYS = ("map", "start", "goal", "start_goal", "margin")
 
@@ -92,7 +112,6 @@ class FixedSettings:
         vehicle: a vehicle preset name, a TOML file (resolved path) or a rotorpy dict
             (``module:NAME`` or ``file.py:NAME``, its file resolved).
         settle: time flown after each trajectory ends, s.
-        method: trajectory shape (:data:`~quadnav.trajectory.generate.METHODS`).
         timing: segment timing (:data:`~quadnav.trajectory.generate.TIMINGS`).
         improve: samples of improvement after a search's first path.
         time_cap: wall-time cap of a search, s.
@@ -104,7 +123,6 @@ class FixedSettings:
     margin: float | None = None
     vehicle: str = DEFAULT_PRESET
     settle: float = SimSettings.settle_time
-    method: str = "minsnap"
     timing: str = "fastest"
     improve: int = DEFAULT_IMPROVE
     time_cap: float = DEFAULT_TIME_CAP
@@ -114,7 +132,7 @@ class FixedSettings:
 
 #: Keys of the fixed settings.
 FIXED_KEYS = tuple(FixedSettings.__dataclass_fields__)
-ALL_KEYS = GRID_KEYS + FIXED_KEYS
+ALL_KEYS = (*GRID_KEYS, METHOD_KEY, *FIXED_KEYS)
 
 
 @dataclass(frozen=True)
@@ -134,6 +152,10 @@ class MapEntry:
     margin: float | None = None
 
 
+#: A wind of the grid: a steady force (3,) N, world frame, or a wind class's spec.
+Wind = tuple[float, float, float] | str
+
+
 @dataclass(frozen=True)
 class MissionSpec:
     """One mission of a batch: everything its row depends on besides the fixed settings.
@@ -142,28 +164,53 @@ class MissionSpec:
         map: the map and its query.
         seed: seed of the planner, the gusts, the spread factors and a drawn start/goal.
         speed: top speed, m/s, or ``"max"``: as fast as the vehicle can follow.
-        wind: (3,) steady force, N, world frame.
+        wind: (3,) steady force, N, world frame, or a wind class's spec.
         gusts: gust standard deviation per axis, N.
         spread: the vehicle spread.
-        planner: planner name.
+        planner: planner name or spec.
         gains: ``default`` or a gains file (resolved path).
+        controller: controller name or spec.
+        method: the trajectory method, or None when ``reference`` replaces the trajectory
+            stage.
+        reference: a trajectory class's spec flown instead of a method's trajectory, or
+            None.
     """
 
     map: MapEntry
     seed: int
     speed: Speed
-    wind: tuple[float, float, float]
+    wind: Wind
     gusts: float
     spread: Spread
     planner: str
     gains: str
+    controller: str = DEFAULT_CONTROLLER
+    method: str | None = DEFAULT_METHOD
+    reference: str | None = None
 
     @property
     def key(self) -> str:
-        """A short stable name of the mission: a hash of its grid values."""
+        """A short stable name of the mission: a hash of its grid values. A mission that
+        flies the default controller and method has the key it had before batches could
+        vary them (:attr:`earlier_key`), so a batch folder written then resumes."""
+        chosen = {"controller": self.controller, "method": self.method,
+                  "reference": self.reference}
+        defaults = {"controller": DEFAULT_CONTROLLER, "method": DEFAULT_METHOD,
+                    "reference": None}
+        changed = {name: value for name, value in chosen.items() if value != defaults[name]}
+        return self._hash([changed] if changed else [])
+
+    @property
+    def earlier_key(self) -> str:
+        """The key a batch folder written before controllers, methods and references were
+        values of the grid gave this mission (then flown with the default controller and
+        the batch's one method)."""
+        return self._hash([])
+
+    def _hash(self, extra: list) -> str:
         speed = None if self.speed == MAX_SPEED else self.speed  # as keys were made before
         values = json.dumps([self.map.__dict__, self.seed, speed, self.wind, self.gusts,
-                             self.spread.__dict__, self.planner, self.gains],
+                             self.spread.__dict__, self.planner, self.gains, *extra],
                             sort_keys=True)
         return hashlib.sha256(values.encode()).hexdigest()[:16]
 
@@ -175,41 +222,70 @@ class BatchSpec:
     maps: tuple[MapEntry, ...]
     seeds: tuple[int, ...]
     speeds: tuple[Speed, ...]
-    winds: tuple[tuple[float, float, float], ...]
+    winds: tuple[Wind, ...]
     gusts: tuple[float, ...]
     spreads: tuple[Spread, ...]
     planners: tuple[str, ...]
     gains: tuple[str, ...]
     fixed: FixedSettings
+    controllers: tuple[str, ...] = (DEFAULT_CONTROLLER,)
+    methods: tuple[str, ...] = (DEFAULT_METHOD,)
+    references: tuple[str, ...] = (NO_REFERENCE,)
+
+    @property
+    def trajectories(self) -> list[tuple[str | None, str | None]]:
+        """What makes each mission's reference, as (method, reference) pairs, in the order
+        of :attr:`references`: ``none`` stands for every method (with no reference), any
+        other entry for its trajectory class (with no method)."""
+        return [pair for reference in self.references for pair in (
+            [(method, None) for method in self.methods] if reference == NO_REFERENCE
+            else [(None, reference)])]
+
+    @property
+    def contender_keys(self) -> list[str]:
+        """The lists of contenders that hold more than one: of ``controllers``,
+        ``planners``, ``methods`` with ``references`` (as ``references``), ``winds`` and
+        ``gains``."""
+        lists = {"controllers": self.controllers, "planners": self.planners,
+                 "references": self.trajectories, "winds": self.winds, "gains": self.gains}
+        return [key for key, values in lists.items() if len(values) > 1]
 
     def missions(self) -> list[MissionSpec]:
         """Every mission, in a fixed order: map, speed, wind, gusts, spread, planner,
-        gains, then seed (innermost)."""
-        return [MissionSpec(m, seed, speed, wind, gust, spread, planner, gains)
-                for m, speed, wind, gust, spread, planner, gains, seed in product(
+        gains, controller, trajectory, then seed (innermost)."""
+        return [MissionSpec(m, seed, speed, wind, gust, spread, planner, gains, controller,
+                            method, reference)
+                for m, speed, wind, gust, spread, planner, gains, controller,
+                (method, reference), seed in product(
                     self.maps, self.speeds, self.winds, self.gusts, self.spreads,
-                    self.planners, self.gains, self.seeds)]
+                    self.planners, self.gains, self.controllers, self.trajectories,
+                    self.seeds)]
 
     @property
     def size(self) -> int:
         """Number of missions."""
         return math.prod(len(values) for values in (
             self.maps, self.seeds, self.speeds, self.winds, self.gusts, self.spreads,
-            self.planners, self.gains))
+            self.planners, self.gains, self.controllers, self.trajectories))
 
     def table(self) -> dict[str, Any]:
         """The spec as a TOML-like table with every path resolved and every default filled
-        in; :func:`parse_spec` reads it back to this spec."""
+        in (but the methods when no mission flies one); :func:`parse_spec` reads it back to
+        this spec."""
+        methods = {"methods": list(self.methods)} if NO_REFERENCE in self.references else {}
         maps = [{key: list(value) if isinstance(value, tuple) else value
                  for key, value in entry.__dict__.items() if value is not None}
                 for entry in self.maps]
         return {
             "maps": maps, "seeds": list(self.seeds),
             "speeds": list(self.speeds),
-            "winds": [list(w) for w in self.winds], "gusts": list(self.gusts),
+            "winds": [w if isinstance(w, str) else list(w) for w in self.winds],
+            "gusts": list(self.gusts),
             "spreads": [s.__dict__ for s in self.spreads], "planners": list(self.planners),
-            "gains": list(self.gains),
-        } | {key: value for key, value in self.fixed.__dict__.items() if value is not None}
+            "gains": list(self.gains), "controllers": list(self.controllers),
+            "references": list(self.references),
+        } | methods | {key: value for key, value in self.fixed.__dict__.items()
+                       if value is not None}
 
 
 class _Source:
@@ -255,15 +331,28 @@ def parse_spec(table: dict[str, Any], folder: str | Path,
         maps=tuple(_map_entry(item, folder, src) for item in _list(table, "maps", src)),
         seeds=_seeds(table["seeds"], src),
         speeds=tuple(_speed(value, src) for value in _list(table, "speeds", src)),
-        winds=tuple(_wind(value, src) for value in _list(table, "winds", src, [[0, 0, 0]])),
+        winds=tuple(_wind(value, folder, src)
+                    for value in _list(table, "winds", src, [[0, 0, 0]])),
         gusts=tuple(_number(value, GUSTS, "gusts", src)
                     for value in _list(table, "gusts", src, [0.0])),
         spreads=tuple(_spread(value, src) for value in _list(table, "spreads", src, [0.0])),
-        planners=tuple(_planner(value, src)
+        planners=tuple(_plugin(value, folder, "planners", get_planner, src)
                        for value in _list(table, "planners", src, ["rrtstar"])),
         gains=tuple(_gains(value, folder, src)
                     for value in _list(table, "gains", src, [DEFAULT_GAINS])),
-        fixed=fixed)
+        fixed=fixed,
+        controllers=tuple(_plugin(value, folder, "controllers", controller_class, src)
+                          for value in _list(table, "controllers", src,
+                                             [DEFAULT_CONTROLLER])),
+        methods=_methods(table, src),
+        references=tuple(_reference(value, folder, src)
+                         for value in _list(table, "references", src, [NO_REFERENCE])))
+    if NO_REFERENCE not in spec.references and (
+            "methods" in table or METHOD_KEY in table):
+        key = "methods" if "methods" in table else METHOD_KEY
+        raise src.error(key, f"no mission flies a method: every reference is a trajectory "
+                             f"class of your own (add {NO_REFERENCE!r} to references to fly "
+                             "the methods too)")
     if spec.size > MAX_MISSIONS:
         raise QuadnavError(f"{src.name}: the grid holds {format_number(spec.size)} missions; "
                            f"expected at most {format_number(MAX_MISSIONS)}")
@@ -315,11 +404,14 @@ def _speed(value: Any, src: _Source) -> Speed:
     return speed
 
 
-def _wind(value: Any, src: _Source) -> tuple[float, float, float]:
+def _wind(value: Any, folder: Path, src: _Source) -> Wind:
+    if isinstance(value, str):
+        return _plugin(value, folder, "winds", wind_maker, src)
     if not (isinstance(value, list) and len(value) == 3
             and all(_is_number(v) and v in FORCE for v in value)):
         raise src.error("winds", f"expected [fx, fy, fz] forces, each {FORCE.describe()}, "
-                                 f"got {value!r}")
+                                 f"or a wind class (module:Class or file.py:Class), got "
+                                 f"{value!r}")
     x, y, z = (float(v) for v in value)
     return x, y, z
 
@@ -334,14 +426,47 @@ def _spread(value: Any, src: _Source) -> Spread:
     return Spread(**dict.fromkeys(SPREAD_PARTS, _number(value, SPREAD, "spreads", src)))
 
 
-def _planner(value: Any, src: _Source) -> str:
-    if not isinstance(value, str):
-        raise src.error("planners", f"expected a planner name, got {value!r}")
+def _plugin(value: Any, folder: Path, key: str, check: Callable[[str], object],
+            src: _Source) -> str:
+    """A name or plug-in spec of the list ``key``, the path of a file in it
+    (``path/to/file.py:Name``) resolved against ``folder``
+    (:func:`~quadnav.missionconfig.checks.located`), loaded and checked by
+    ``check`` (QuadnavError for a bad one, naming the spec's line; a plug-in's own
+    traceback kept)."""
+    if not isinstance(value, str) or not value.strip():
+        raise src.error(key, f"expected a name or module:NAME or file.py:NAME, got {value!r}")
+    if value.partition(":")[0].endswith(".py"):
+        value = located(value, folder)
     try:
-        get_planner(value)
+        check(value)
     except QuadnavError as error:
-        raise src.error("planners", str(error)) from None
+        raise _located_error(src, key, error) from None
     return value
+
+
+def _located_error(src: _Source, key: str, error: QuadnavError) -> QuadnavError:
+    """``error`` as one line naming ``key``'s line; a plug-in's own traceback kept."""
+    located_error = src.error(key, str(error))
+    if isinstance(error, PluginError):
+        return PluginError(str(located_error), error.details, error.exit_code)
+    return located_error
+
+
+def _methods(table: dict, src: _Source) -> tuple[str, ...]:
+    """The trajectory methods: ``methods``, or the one of ``method``."""
+    if "methods" in table and METHOD_KEY in table:
+        raise src.error(METHOD_KEY, "give methods (a list) or method (one), not both")
+    key = METHOD_KEY if METHOD_KEY in table else "methods"
+    return tuple(_choice(value, tuple(METHODS.names()), key, src)
+                 for value in _list(table, key, src, [DEFAULT_METHOD]))
+
+
+def _reference(value: Any, folder: Path, src: _Source) -> str:
+    """``none`` or a trajectory class built from each mission's path."""
+    if value == NO_REFERENCE:
+        return value
+    return _plugin(value, folder, "references",
+                   lambda text: load_trajectory_class(text, with_points=True), src)
 
 
 def _file(value: Any, folder: Path, key: str, what: str, src: _Source) -> str:
@@ -380,10 +505,7 @@ def _vehicle(value: Any, folder: Path, src: _Source) -> str:
         try:
             load_params(value)
         except QuadnavError as error:
-            located = src.error("vehicle", str(error))
-            if isinstance(error, PluginError):  # keep the user code's traceback
-                raise PluginError(str(located), error.details, error.exit_code) from None
-            raise located from None
+            raise _located_error(src, "vehicle", error) from None
         return value
     return _file(value, folder, "vehicle", vehicle_forms(), src)
 
@@ -450,8 +572,6 @@ def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
               "physics_rate": RATE, "control_rate": RATE}
     values = {key: _number(table[key], allowed, key, src)
               for key, allowed in checks.items() if key in table}
-    if "method" in table:
-        values["method"] = _choice(table["method"], tuple(METHODS.names()), "method", src)
     if "timing" in table:
         values["timing"] = _choice(table["timing"], TIMINGS, "timing", src)
     values["vehicle"] = _vehicle(table.get("vehicle", base.vehicle), folder, src)

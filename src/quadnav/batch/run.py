@@ -46,7 +46,8 @@ class BatchRun:
         self.record = batch_record(spec, self.context)
         self.missions = spec.missions()
         self.rows: dict[str, dict[str, Any]] = {
-            row["mission_key"]: row for row in finished_rows(self.folder, self.record, restart)}
+            row["mission_key"]: row
+            for row in finished_rows(self.folder, self.record, self.missions, restart)}
         self.todo = [m for m in self.missions if m.key not in self.rows]
 
     def run(self, workers: int | None = None, ray: bool = False, address: str | None = None,
@@ -74,7 +75,7 @@ class BatchRun:
                                      ray, address)
             ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
-            begin(self.folder, self.record, self.restart)
+            begin(self.folder, self.record, self.restart, list(self.rows.values()))
             journal = Journal(self.folder / RESULTS_CSV)
             try:
                 if executor is not None:

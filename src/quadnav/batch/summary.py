@@ -1,8 +1,9 @@
 """The summary of a batch: success rates per group of grid values with Wilson intervals,
 and ``summary.json``.
 
-A group is every distinct combination of the grid values but the seed: map, speed, wind,
-gusts, spread, planner and gains, and the start, goal and margin when they were given
+A group is every distinct combination of the grid values but the seed: map, speed, wind
+(force or class), gusts, spread, planner, gains, controller and trajectory method or class,
+and the start, goal and margin when they were given
 (not drawn from each seed). Success is the mission's own: the goal reached within the
 tolerance with no contact and the body inside the map; a refused mission counts as a failure.
 Apart from it, each rate counts the flights that kept less margin than asked off the legs
@@ -18,30 +19,26 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from scipy.stats import binomtest
+
 from quadnav.batch.table import AXES
 from quadnav.files import atomic_output
 
-#: z of a two-sided 95 % normal interval.
-Z95 = 1.959963984540054
 #: Columns whose value names a group (the start and goal only when given).
-GROUP_COLUMNS = ("map", "speed", "wind_x", "wind_y", "wind_z", "gusts", "spread", "planner",
-                 "gains", "margin_m")
+GROUP_COLUMNS = ("map", "speed", "wind_x", "wind_y", "wind_z", "wind_model", "gusts", "spread",
+                 "planner", "gains", "controller", "method", "reference", "margin_m")
 QUERY_COLUMNS = tuple(f"{end}_{a}" for end in ("start", "goal") for a in AXES)
 #: Columns whose medians each group reports.
 MEDIAN_COLUMNS = ("rms_tracking_error_m", "min_clearance_m", "trajectory_duration_s")
 SUMMARY_JSON = "summary.json"
 
 
-def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """The Wilson score interval of a success rate, ``successes`` of ``n`` (n > 0)."""
-    p = successes / n
-    denominator = 1.0 + z * z / n
-    centre = (p + z * z / (2 * n)) / denominator
-    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / denominator
-    # the bounds are exactly 0 with no success and 1 with no failure
-    low = 0.0 if successes == 0 else max(0.0, centre - half)
-    high = 1.0 if successes == n else min(1.0, centre + half)
-    return low, high
+def wilson_interval(successes: int, n: int) -> tuple[float, float]:
+    """The Wilson score 95 % interval of a success rate, ``successes`` of ``n`` (n > 0),
+    without continuity correction (scipy's ``binomtest(...).proportion_ci``): exactly 0
+    below with no success and 1 above with no failure."""
+    interval = binomtest(successes, n).proportion_ci(confidence_level=0.95, method="wilson")
+    return float(interval.low), float(interval.high)
 
 
 def group_values(row: dict[str, Any]) -> dict[str, Any]:

@@ -1,7 +1,8 @@
 """``summary.html``: one self-contained page over a batch's results, readable offline.
 
 * the success rate per map and speed as a heat map, one panel per combination of the
-  other grid values (wind, gusts, spread, planner, gains), each cell with its Wilson 95 %
+  other grid values (wind, gusts, spread, planner, gains, controller, trajectory method or
+  class), each cell with its Wilson 95 %
   interval;
 * box plots of the RMS tracking error, the least clearance and the trajectory duration
   of each group's flown missions;
@@ -30,6 +31,7 @@ from matplotlib.figure import Figure
 from matplotlib.text import Text
 
 from quadnav import __version__
+from quadnav.batch.compare import short_spec
 from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
 from quadnav.files import atomic_output
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
@@ -59,6 +61,8 @@ CELL_INCHES = 0.9
 PANEL_GAP_INCHES = 0.3
 #: Inches of the colour bar beside the heat maps, with its labels.
 COLORBAR_INCHES = 1.0
+#: Inches a character of a panel's title takes, about (wider than most).
+TITLE_INCHES_PER_CHARACTER = 0.65 * TITLE_FONT / 72
 #: Inches of one row of a heat map, and of a line of panels beyond its rows (title, ticks).
 ROW_INCHES = 0.42
 PANEL_INCHES = 0.8
@@ -144,10 +148,12 @@ class _Groups:
         if "spread" in self.varying:
             parts.append(f"spread {group['spread']}")
         if "planner" in self.varying:
-            parts.append(group["planner"])
+            parts.append(short_spec(group["planner"]))
         if "gains" in self.varying:
             parts.append(f"gains {Path(group['gains']).name}")
-        return ", ".join(parts)
+        parts += [short_spec(group[name] or "") for name in (
+            "wind_model", "controller", "method", "reference") if name in self.varying]
+        return ", ".join(part for part in parts if part)
 
     def label(self, group: dict[str, Any], full: bool = False) -> str:
         """Everything that tells the group apart from the others, the map by its short
@@ -157,6 +163,18 @@ class _Groups:
             parts.append(_speed(group["speed"]))
         panel = self.panel_label(group)
         return ", ".join(parts + ([panel] if panel else []))
+
+
+def wrapped(text: str, width: int) -> str:
+    """``text`` in lines of at most ``width`` characters where it can be, each broken only
+    after a space, ``,``, ``/``, ``:`` or ``(`` (a word or a number is never cut)."""
+    lines = [""]
+    for piece in re.split(r"(?<=[ ,/:(])", text):
+        if lines[-1] and len(lines[-1]) + len(piece.rstrip()) > width:
+            lines[-1] = lines[-1].rstrip()
+            lines.append("")
+        lines[-1] += piece
+    return "\n".join(line.rstrip() for line in lines)
 
 
 def json_key(value: Any) -> str:
@@ -189,6 +207,8 @@ def heat_map(labels: _Groups) -> tuple[Figure, dict[Text, str]]:
     width = max(WIDTH, label_width + panel_width + COLORBAR_INCHES)  # wider for many speeds
     columns = max(1, min(len(panels), int((width - label_width - COLORBAR_INCHES)
                                           // panel_width)))
+    title_width = int(((width - label_width - COLORBAR_INCHES) / columns - PANEL_GAP_INCHES)
+                      / TITLE_INCHES_PER_CHARACTER)
     lines = math.ceil(len(panels) / columns)
     fig = Figure(figsize=(width, lines * (PANEL_INCHES + ROW_INCHES * len(rows)) + 0.6),
                  dpi=DPI, layout="constrained")
@@ -212,7 +232,7 @@ def heat_map(labels: _Groups) -> tuple[Figure, dict[Text, str]]:
             drawn |= {text: full[text.get_text()] for text in ax.get_yticklabels()}
         ax.tick_params(length=0)
         if title:
-            ax.set_title(title, fontsize=TITLE_FONT)
+            ax.set_title(wrapped(title, title_width), fontsize=TITLE_FONT)
     for ax in axes[len(panels):]:
         ax.set_visible(False)
     bar = fig.colorbar(image, ax=axes[:len(panels)].tolist(), shrink=0.8, pad=0.02)
@@ -282,19 +302,19 @@ def _cell(value: Any) -> str:
     return html.escape(str(value))
 
 
-def _breakable(text: str) -> str:
-    """``text`` as HTML that may wrap after each ``/`` and ``_``, so a long path or column
-    name fits a narrow column."""
-    return re.sub(r"([/_])", r"\1<wbr>", html.escape(text))
+def breakable(text: str) -> str:
+    """``text`` as HTML that may wrap after each ``/``, ``_``, ``:`` and ``(``, so a long
+    path, plug-in spec or column name fits a narrow column."""
+    return re.sub(r"([/_:(])", r"\1<wbr>", html.escape(text))
 
 
 def groups_table(labels: _Groups) -> str:
     """The groups as an HTML table: what tells them apart, n, successes, the rate and its
     interval (percent), refused missions, flights short of the margin and the medians."""
     header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
-              _breakable("kept less margin"),
-              *(_breakable(f"median {name}") for name in MEDIAN_COLUMNS))
-    rows = [(_breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
+              breakable("kept less margin"),
+              *(breakable(f"median {name}") for name in MEDIAN_COLUMNS))
+    rows = [(breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
              _percent(g["success_rate"]),
              f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
              str(g["short_of_margin"]),

@@ -44,11 +44,16 @@ POINTS = ("start", "goal", "goal_asked")
 #: The grid values of a mission and its flown vehicle's factors.
 GRID_COLUMNS: tuple[tuple[str, str], ...] = (
     ("mission_key", STR), ("map", STR), ("seed", INT), ("speed", FLOAT),
-    ("wind_x", FLOAT), ("wind_y", FLOAT), ("wind_z", FLOAT), ("gusts", FLOAT),
+    ("wind_x", FLOAT), ("wind_y", FLOAT), ("wind_z", FLOAT), ("wind_model", STR),
+    ("gusts", FLOAT),
     ("spread", STR), ("spread_mass", FLOAT), ("spread_thrust", FLOAT), ("spread_drag", FLOAT),
     ("mass_factor", FLOAT), ("thrust_factor", FLOAT), ("drag_factor", FLOAT),
-    ("planner", STR), ("gains", STR), ("start_goal_drawn", BOOL),
+    ("planner", STR), ("gains", STR), ("controller", STR), ("method", STR), ("reference", STR),
+    ("start_goal_drawn", BOOL),
 )
+#: The columns of the grid values added when controllers, methods, references and wind
+#: classes became values of the grid: a table written before has none of them.
+ADDED_COLUMNS = ("wind_model", "controller", "method", "reference")
 #: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
 METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("success", BOOL), *((f"{point}_{a}", FLOAT) for point in POINTS for a in AXES),
@@ -72,6 +77,8 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
 COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("error", STR))
 NAMES = tuple(name for name, _ in COLUMNS)
 TYPES = dict(COLUMNS)
+#: The columns of a table written before :data:`ADDED_COLUMNS` were added.
+EARLIER_NAMES = tuple(name for name in NAMES if name not in ADDED_COLUMNS)
 #: Columns of wall time, which differ between runs of the same mission.
 WALL_TIME_COLUMNS = ("planning_time_s", "trajectory_time_s", "sim_load_time_s",
                      "sim_wall_time_s", "real_time_factor")
@@ -87,16 +94,8 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
     drag) and whether its start and goal were ``drawn``; then the metrics of the mission
     ``flown``, or for a refused mission (``flown`` None) the ``error`` and what is known of
     its query (``start``, ``goal`` (3,) m or None, ``margin`` m)."""
-    row: dict[str, Any] = dict.fromkeys(NAMES)
-    spread = mission.spread
-    row |= {
-        "mission_key": mission.key, "map": mission.map.map, "seed": mission.seed,
-        "speed": None if mission.speed == MAX_SPEED else mission.speed,  # empty: max
-        "gusts": mission.gusts, "spread": spread.label, "spread_mass": spread.mass,
-        "spread_thrust": spread.thrust, "spread_drag": spread.drag, "planner": mission.planner,
-        "gains": mission.gains, "start_goal_drawn": drawn,
-    }
-    row |= {f"wind_{a}": w for a, w in zip(AXES, mission.wind, strict=True)}
+    row: dict[str, Any] = dict.fromkeys(NAMES) | mission_columns(mission)
+    row["start_goal_drawn"] = drawn
     row |= dict(zip(("mass_factor", "thrust_factor", "drag_factor"), factors, strict=True))
     if flown is None:
         row |= {"success": False, "path_found": False, "collision": False,
@@ -114,6 +113,24 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
         row |= _point_columns(name, metrics[name])
     row["search_stopped_by"] = flown.plan.stats.stopped_by
     return row
+
+
+def mission_columns(mission: MissionSpec) -> dict[str, Any]:
+    """The columns of ``mission``'s grid values: its key, map, seed, speed (None: max),
+    wind (a force's ``wind_x`` ... ``wind_z``, or 0 and its class's spec as
+    ``wind_model``), gusts, spread, planner, gains, controller, and method or reference."""
+    spread, wind = mission.spread, mission.wind
+    model = wind if isinstance(wind, str) else None
+    force = (0.0, 0.0, 0.0) if isinstance(wind, str) else wind
+    return {
+        "mission_key": mission.key, "map": mission.map.map, "seed": mission.seed,
+        "speed": None if mission.speed == MAX_SPEED else mission.speed,  # empty: max
+        "wind_model": model, "gusts": mission.gusts, "spread": spread.label,
+        "spread_mass": spread.mass, "spread_thrust": spread.thrust,
+        "spread_drag": spread.drag, "planner": mission.planner, "gains": mission.gains,
+        "controller": mission.controller, "method": mission.method,
+        "reference": mission.reference,
+    } | {f"wind_{a}": w for a, w in zip(AXES, force, strict=True)}
 
 
 def _point_columns(name: str, point: Sequence[float] | np.ndarray | None) -> dict[str, Any]:
@@ -159,29 +176,44 @@ def csv_line(row: dict[str, Any]) -> str:
 
 
 HEADER = ",".join(NAMES) + "\n"
+#: The header of a table written before :data:`ADDED_COLUMNS` were added.
+EARLIER_HEADER = ",".join(EARLIER_NAMES) + "\n"
 
 
-def read_rows(path: Path) -> list[dict[str, Any]]:
+def read_rows(path: Path, missions: Sequence[MissionSpec] = ()) -> list[dict[str, Any]]:
     """The rows of a results.csv (or journal); a last line without its newline (cut short
-    by a kill) is dropped. QuadnavError naming the file and line if it is not one."""
+    by a kill) is dropped. A table written before :data:`ADDED_COLUMNS` were added is read
+    too, each row completed from its mission among ``missions`` (found by its
+    :attr:`~quadnav.batch.grid.MissionSpec.earlier_key`; the row takes the mission's
+    key). QuadnavError naming the file and line if it is not a table.
+    """
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
-    if not text.startswith(HEADER):
+    earlier = text.startswith(EARLIER_HEADER)
+    if not (text.startswith(HEADER) or earlier):
         raise QuadnavError(f"{path}:1: expected the header of a quadnav batch table "
                            f"({len(NAMES)} columns, from {NAMES[0]} to {NAMES[-1]})")
-    body = text[len(HEADER):]
+    names = EARLIER_NAMES if earlier else NAMES
+    body = text[len(EARLIER_HEADER if earlier else HEADER):]
     body = body[:body.rfind("\n") + 1]
     rows = []
     for number, fields in enumerate(csv.reader(io.StringIO(body)), start=2):
         try:
-            if len(fields) != len(NAMES):
-                raise ValueError(f"expected {len(NAMES)} fields, got {len(fields)}")
-            rows.append({name: _parse(field, TYPES[name])
-                         for name, field in zip(NAMES, fields, strict=True)})
+            if len(fields) != len(names):
+                raise ValueError(f"expected {len(names)} fields, got {len(fields)}")
+            rows.append(dict.fromkeys(NAMES) | {
+                name: _parse(field, TYPES[name])
+                for name, field in zip(names, fields, strict=True)})
         except ValueError as error:
             raise QuadnavError(f"{path}:{number}: {error}") from None
+    if earlier:
+        by_key = {mission.earlier_key: mission for mission in missions}
+        rows = [row | {name: value for name, value in mission_columns(mission).items()
+                       if name in (*ADDED_COLUMNS, "mission_key")}
+                if (mission := by_key.get(row["mission_key"])) is not None else row
+                for row in rows]
     return rows
 
 
@@ -218,10 +250,15 @@ def write_tables(rows: Iterable[dict[str, Any]], folder: Path) -> list[str]:
     """Write ``rows`` to ``folder``/results.csv and results.parquet, each atomically;
     returns the names written."""
     rows = list(rows)
-    with atomic_output(folder / RESULTS_CSV) as tmp:
-        tmp.write_text(HEADER + "".join(csv_line(row) for row in rows), encoding="utf-8")
+    write_csv(rows, folder / RESULTS_CSV)
     write_parquet(rows, folder / RESULTS_PARQUET)
     return [RESULTS_PARQUET, RESULTS_CSV]
+
+
+def write_csv(rows: Sequence[dict[str, Any]], path: Path) -> None:
+    """The rows as a results.csv, atomically."""
+    with atomic_output(path) as tmp:
+        tmp.write_text(HEADER + "".join(csv_line(row) for row in rows), encoding="utf-8")
 
 
 def write_parquet(rows: list[dict[str, Any]], path: Path) -> None:

@@ -10,7 +10,14 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from quadnav.batch.grid import BatchSpec, parse_spec, read_spec
+from quadnav.batch.compare import contender_rows, varying_axes
+from quadnav.batch.grid import (
+    DEFAULT_METHOD,
+    NO_REFERENCE,
+    BatchSpec,
+    parse_spec,
+    read_spec,
+)
 from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import rate
 from quadnav.cli.args import (
@@ -24,13 +31,17 @@ from quadnav.cli.args import (
     workers_description,
 )
 from quadnav.cli.commands import command_help
+from quadnav.cli.compare_command import leaderboard
+from quadnav.cli.flight_args import force_or_spec, wind_arguments
 from quadnav.cli.launch import interrupted_exit_code
 from quadnav.cli.progress import terminal_bar
+from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.errors import QuadnavError
 from quadnav.limits import Range
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
 from quadnav.planning import planner_names
 from quadnav.runfolder import check_output_folder
+from quadnav.trajectory.generate import METHODS
 from quadnav.vehicle.params import DEFAULT_PRESET, vehicle_forms
 
 #: Seeds of the simple case when --seeds is not given.
@@ -39,7 +50,10 @@ DEFAULT_SEEDS = 10
 GRID_FLAGS = {"seeds": "--seeds", "speeds": "--speeds", "accel": "--accel",
               "margin": "--margin", "start": "--start", "goal": "--goal",
               "start_goal": "--start-goal", "params": "--params", "gains": "--gains",
-              "planner": "--planner"}
+              "planners": "--planner", "controllers": "--controller", "methods": "--method",
+              "references": "--reference", "winds": "--wind"}
+#: The grid's lists of contenders that flags set as they are.
+CONTENDER_FLAGS = ("planners", "controllers", "methods", "references")
 
 
 def batch_spec(args: argparse.Namespace) -> BatchSpec:
@@ -60,12 +74,20 @@ def batch_spec(args: argparse.Namespace) -> BatchSpec:
     table = {"maps": [{"map": name} | query for name in inputs],
              "seeds": DEFAULT_SEEDS if args.seeds is None else args.seeds,
              "speeds": [DEFAULT_SPEED] if args.speeds is None else args.speeds,
-             "vehicle": args.params or DEFAULT_PRESET,
-             "planners": [args.planner or "rrtstar"]}
+             "vehicle": args.params or DEFAULT_PRESET}
     optional = {"accel": args.accel, "margin": args.margin,
-                "gains": None if args.gains is None else [args.gains]}
+                "gains": None if args.gains is None else [args.gains],
+                "winds": None if args.winds is None else [_wind(w) for w in args.winds]}
+    optional |= {key: getattr(args, key) for key in CONTENDER_FLAGS}
     table |= {key: value for key, value in optional.items() if value is not None}
     return parse_spec(table, Path.cwd(), "the command line")
+
+
+def _wind(values: list[float | str]) -> list[float] | str:
+    """One ``--wind``'s values as a ``winds`` entry: the force [fx, fy, fz] N or the wind
+    class's spec."""
+    force, model = wind_arguments(values)
+    return force if model is None else model
 
 
 class _Progress:
@@ -101,6 +123,10 @@ class _Progress:
 def batch(args: argparse.Namespace) -> int:
     """Run the batch; exit 0 once every mission has a row, whatever the success rate."""
     spec = batch_spec(args)
+    if args.compare and not spec.contender_keys:
+        raise QuadnavError("--compare: the batch has a single contender (one controller, "
+                           "planner, method or reference, wind and gains); expected two or "
+                           "more of one of them")
     folder = check_output_folder(args.output)
     run = BatchRun(spec, folder, restart=args.restart)
     done_before = len(run.rows)
@@ -128,9 +154,25 @@ def batch(args: argparse.Namespace) -> int:
           f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
+    _print_contenders(run.finished, folder)
     print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
     print("wrote " + ", ".join(str(folder / name) for name in written))
+    if args.compare:
+        leaderboard(folder, run.finished, None)
     return 0
+
+
+def _print_contenders(rows: list[dict], folder: Path) -> None:
+    """The success rate of each contender of ``rows`` when the batch has several."""
+    by = varying_axes(rows)
+    if not by:
+        return
+    print(f"per {', '.join(by)} (quadnav compare {folder} draws the leaderboard):")
+    for name, group in contender_rows(rows, by).items():
+        found = rate(group)
+        print(f"  {name}: {found['successes']} of {found['n']}, "
+              f"{100 * found['success_rate']:.1f} % ({100 * found['ci_low']:.1f} to "
+              f"{100 * found['ci_high']:.1f} %)")
 
 
 def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
@@ -142,8 +184,10 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                     "and DIR/results.csv (one row per mission), DIR/summary.json (success rate "
                     "per group with Wilson 95 % intervals) and DIR/summary.html. Give maps and "
                     "flags for the simple case, or one TOML spec for the full grid (see the "
-                    "README). A re-run into the same DIR skips the missions already done; "
-                    "Ctrl-C keeps every finished row. Exit 0 when every mission has a row, 2 on "
+                    "README); several controllers, planners, methods, references or winds "
+                    "are contenders, ranked by quadnav compare DIR (or --compare). A re-run "
+                    "into the same DIR skips the missions already done; Ctrl-C keeps every "
+                    "finished row. Exit 0 when every mission has a row, 2 on "
                     "bad input, 130/143 when stopped.")
     p.add_argument("inputs", nargs="+", metavar="MAP|SPEC.toml",
                    help="map files or built-in world specs, or one TOML spec")
@@ -159,11 +203,32 @@ def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
                    help=f"vehicle: {vehicle_forms()} (default: {DEFAULT_PRESET})")
     p.add_argument("--gains", metavar="NAME|FILE",
                    help="controller gains: a TOML file or a course gain table (as in fly)")
-    p.add_argument("--planner", metavar="NAME|SPEC",
-                   help=f"one of {', '.join(planner_names())}, or a function of your own, "
-                        "module:FUNCTION or path/to/file.py:FUNCTION (as in fly; default: "
-                        "rrtstar)")
+    p.add_argument("--planner", dest="planners", nargs="+", metavar="NAME|SPEC",
+                   help=f"planners, each one of {', '.join(planner_names())}, or a function "
+                        "of your own, module:FUNCTION or path/to/file.py:FUNCTION (as in fly; "
+                        "default: rrtstar)")
+    p.add_argument("--controller", dest="controllers", nargs="+", metavar="NAME|SPEC",
+                   help="controllers, each cascade, se3 or a class of your own, module:Class "
+                        "or path/to/file.py:Class(key=value, ...) (as in fly; default: "
+                        f"{DEFAULT_CONTROLLER})")
+    p.add_argument("--method", dest="methods", nargs="+", choices=METHODS.names(),
+                   metavar="METHOD",
+                   help=f"trajectory methods, each one of {', '.join(METHODS.names())} "
+                        f"(default: {DEFAULT_METHOD})")
+    p.add_argument("--reference", dest="references", nargs="+", metavar="none|SPEC",
+                   help=f"{NO_REFERENCE} (the trajectory of each --method) or a trajectory "
+                        "class of your own flown instead, module:Class or "
+                        "path/to/file.py:Class (as fly --reference; default: "
+                        f"{NO_REFERENCE})")
+    p.add_argument("--wind", dest="winds", action="append", nargs="+", type=force_or_spec,
+                   metavar=("FX|SPEC", "FY FZ"),
+                   help="one wind of the grid per --wind: a steady force FX FY FZ, N, or a "
+                        "wind class's spec (as in fly); repeat it for more: --wind 0 0 0 "
+                        "--wind 0.02 0 0 --wind my_wind.py:Gust (default: no wind)")
     add_executor_arguments(p)
+    p.add_argument("--compare", action="store_true",
+                   help="then print and write the leaderboard of its contenders, as quadnav "
+                        "compare DIR does (refused up front for a batch of one contender)")
     p.add_argument("--restart", action="store_true",
                    help="replace a different batch already in DIR instead of refusing")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -37,6 +37,9 @@ COMMANDS: dict[str, Command] = {
                      "fly a given reference (a step, a helix, an MP.csv...) to tune gains"),
     "batch": Command("batch_command", "add_batch_command",
                      "fly many missions (maps x seeds x speeds ...) into a table and summary"),
+    "compare": Command("compare_command", "add_compare_command",
+                       "a batch's leaderboard: controllers, planners ... side by side, with "
+                       "intervals and significance"),
     "refly": Command("refly_command", "add_refly_command",
                      "fly a run folder's mission, or one mission of a batch, again, with "
                      "figures"),

@@ -38,17 +38,17 @@ def _batch_mission(folder: Path, key: str):
     """The config of the mission ``key`` (a mission_key or a row number) of the batch in
     ``folder``, and a function flying it."""
     from quadnav.batch.fly_one import fly_mission_spec, load_context, mission_config
-    from quadnav.batch.folder import read_record, recorded_spec
-    from quadnav.batch.table import RESULTS_CSV, read_rows
+    from quadnav.batch.folder import batch_rows, current_record, read_record, recorded_spec
+    from quadnav.batch.table import RESULTS_CSV
 
-    record = read_record(folder)
+    record = current_record(read_record(folder))
     spec = recorded_spec(folder)
     missions = {mission.key: mission for mission in spec.missions()}
     if key not in missions:
         if not key.isdigit():
             raise QuadnavError(f"{key}: no mission of the batch in {folder} has this key; "
                                f"expected a mission_key or a row number of {RESULTS_CSV}")
-        rows = read_rows(folder / RESULTS_CSV)
+        rows = batch_rows(folder, spec)
         if not 1 <= int(key) <= len(rows):
             raise QuadnavError(f"{key}: expected a row number of {folder / RESULTS_CSV}, "
                                f"from 1 to {len(rows)}")
