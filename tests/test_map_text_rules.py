@@ -146,3 +146,16 @@ def test_a_json_map_padded_with_newlines_reads_in_little_memory(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.strip() == (f'p:{padding + 2}: key "extents" given twice in one '
                                    "object: expected each key once")
+
+
+def test_a_map_with_many_repairs_warns_the_first_ten_and_counts_the_rest():
+    blocks = "".join(f"block {k + 2} 1 0 {k + 1} 2 1\n" for k in range(50))
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        world = parse_map(f"boundary 0 0 0 100 100 5\n{blocks}".encode(), "m.txt")
+    assert len(world.blocks) == 50
+    messages = [str(w.message) for w in record]
+    assert all(issubclass(w.category, MapWarning) for w in record)
+    assert messages[:10] == [f"m.txt:{k + 2}: block: min and max swapped (xmin {k + 2} > "
+                             f"xmax {k + 1}); read as the box between them" for k in range(10)]
+    assert messages[10:] == ["m.txt: 40 more warnings like these"]

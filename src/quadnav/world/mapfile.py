@@ -7,9 +7,12 @@ course map such as ``course:rbe595/map1`` (see :mod:`quadnav.world.courses`).
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-from quadnav.errors import MapError
+from quadnav.errors import MapError, MapWarning
 from quadnav.files import atomic_output
 from quadnav.inputfiles import special_file
 from quadnav.world import builtin, courses
@@ -25,14 +28,50 @@ def _is_json(path: Path, text: str) -> bool:
     return path.suffix.lower() != ".txt" and text.lstrip().startswith("{")
 
 
+#: Warnings about one map shown one by one; the rest are summed up in one line.
+SHOWN_WARNINGS = 10
+
+
 def parse_map(data: bytes, source: str, file_name: str | None = None) -> World:
     """A World named ``source`` from the bytes of a map file in either format: JSON if the
     file's name (``file_name``, default ``source``) ends in ``.json``, text if it ends in
-    ``.txt``, else JSON if it starts with ``{``."""
+    ``.txt``, else JSON if it starts with ``{``. Its first :data:`SHOWN_WARNINGS` repairs
+    are warned one by one, the rest in one line."""
     text = decode_text(data, source)
-    if _is_json(Path(file_name or source), text):
-        return parse_json_map(text, source)
-    return parse_text_map(text, source)
+    with _summed_up_warnings(source):
+        if _is_json(Path(file_name or source), text):
+            return parse_json_map(text, source)
+        return parse_text_map(text, source)
+
+
+@contextmanager
+def _summed_up_warnings(source: str) -> Iterator[None]:
+    """Hold the :class:`MapWarning` s raised in the block; when it ends, warn the first
+    :data:`SHOWN_WARNINGS` of them and, if there were more, one line counting the rest (a
+    map with a million swapped blocks printed a million lines). Other warnings pass."""
+    shown: list[Warning | str] = []
+    count = 0
+    passed_on = warnings.showwarning
+
+    def hold(message: Warning | str, category: type[Warning], *args: object,
+             **kwargs: object) -> None:
+        nonlocal count
+        if not issubclass(category, MapWarning):
+            passed_on(message, category, *args, **kwargs)
+            return
+        count += 1
+        if count <= SHOWN_WARNINGS:
+            shown.append(message)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", MapWarning)
+        warnings.showwarning = hold
+        yield
+    for message in shown:
+        warnings.warn(str(message), MapWarning, stacklevel=3)
+    if count > SHOWN_WARNINGS:
+        warnings.warn(f"{source}: {count - SHOWN_WARNINGS:,} more warnings like these",
+                      MapWarning, stacklevel=3)
 
 
 def read_map(path: str | Path) -> World:
