@@ -105,7 +105,12 @@ def test_a_gains_file_sets_only_its_keys(tmp_path):
 @pytest.mark.parametrize(("text", "message"), [
     ("[velocity]\nkq = [1, 1, 1]\n", r"\[velocity\]: unknown key 'kq'"),
     ("[velocity]\nkp = [1, 1]\n", "kp: expected a list of 3 numbers"),
-    ("[position]\nki = [-1, 0, 0]\n", "ki must be >= 0"),
+    ("[position]\nki = [-1, 0, 0]\n", r"ki: expected each value from 0 to 10,000, got \[-1, 0, 0\]"),
+    # a gain that would fly and diverge (before: exit 1, a failed flight, not bad input)
+    ("[position]\nkp = [1e300, 1, 1]\n", r"kp: expected each value from 0 to 10,000, got \[1e\+300, 1, 1\]"),
+    ("attitude_kp = [12, 12, 10000.5]\n", r"attitude_kp: expected each value from 0 to 10,000, got \[12, 12, 10000.5\]"),
+    ("[limits]\nspeed_xy = 1e300\n", r"speed_xy: expected from 0.01 to 100 m/s, got 1e\+300"),
+    ("[limits]\nrate_max_deg = [360, 360, 1e9]\n", r"rate_max_deg: expected each value above 0, at most 3,600 deg/s"),
     ("[limits]\ntilt_max_deg = 95\n", "tilt_max_deg must be in"),
     ("velocity = 3\n", "velocity must be a table"),
 ])

@@ -94,6 +94,10 @@ def test_se3_gains_are_read_from_a_toml_file_over_the_vehicles_own(tmp_path):
     path.write_text("kr = [300.0, 300.0]\n")
     with pytest.raises(QuadnavError, match=f"{path}: kr: expected a list of 3 numbers"):
         controller_gains("se3", TELLO, path)
+    path.write_text("kx = [1e300, 1, 1]\n")  # flew, and diverged: exit 1, not bad input
+    with pytest.raises(QuadnavError, match=rf"{path}: kx: expected each value from 0 to "
+                                           r"10,000, got \[1e\+300, 1, 1\]"):
+        controller_gains("se3", TELLO, path)
     with pytest.raises(QuadnavError, match="gain table p2a-starter: unknown key 'position'; "
                                            "expected one of kx, kv, kr, kw"):
         controller_gains("se3", TELLO, "p2a-starter")

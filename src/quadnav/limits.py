@@ -127,6 +127,9 @@ MAX_SAMPLES = 1_000_000
 MAX_DURATION = 3600.0
 
 # ------------------------------------------------------------------- simulation
+#: Each gain of a controller's table, per axis, and each integral bound, in its loop's units:
+#: far above any gain that flies, low enough that no step's arithmetic overflows.
+GAIN = Range(0.0, 10_000.0)
 #: Physics and control rates, Hz.
 RATE = Range(10.0, 100_000.0, "Hz")
 #: Time flown after the trajectory ends, s.

@@ -32,12 +32,13 @@ from importlib import resources
 from pathlib import Path
 from typing import TypeVar
 
-import numpy as np
-
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain, from_table, frozen_vector, read_toml, require, vector_field
+from quadnav.limits import ACCELERATION, GAIN, RATE, SPEED, Range, format_number
 
 C = TypeVar("C")
+#: A body rate setpoint's bound, degrees/s (ten turns a second at most).
+RATE_MAX = Range(0.0, 3600.0, "deg/s", above_low=True)
 #: Where the cascade's gain sets are shipped (:func:`shipped`).
 CASCADE_SETS = "presets"
 
@@ -60,8 +61,20 @@ class PID:
     integral_limit: FloatArray = vector_field(1.0, 1.0, 1.0)
 
     def __post_init__(self) -> None:
-        require([(bool(np.all(getattr(self, k) >= 0)), f"{k} must be >= 0, got "
-                  f"{getattr(self, k).tolist()}") for k in ("kp", "ki", "kd", "integral_limit")])
+        require(gain_checks(self, ("kp", "ki", "kd", "integral_limit")))
+
+
+def gain_checks(gains: object, names: tuple[str, ...]) -> list[tuple[bool, str]]:
+    """``(ok, message)`` for each (3,) field of ``gains`` named in ``names``: every value in
+    :data:`~quadnav.limits.GAIN` (a gain of 1e300 would fly, and diverge)."""
+    return [(all(float(v) in GAIN for v in getattr(gains, name)),
+             f"{name}: expected each value {GAIN.describe()}, got "
+             f"{_listed(getattr(gains, name))}") for name in names]
+
+
+def _listed(values: FloatArray) -> str:
+    """``[1, 2.5, 1e+300]``: each value with every digit it has."""
+    return "[" + ", ".join(format_number(float(v)) for v in values) + "]"
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,16 +107,18 @@ class Limits:
     derivative_cutoff_hz: float = 30.0
 
     def __post_init__(self) -> None:
-        positive = ("speed_xy", "speed_up", "speed_down", "acceleration_xy",
-                    "derivative_cutoff_hz")
-        require([(getattr(self, k) > 0, f"{k} must be > 0, got {getattr(self, k)}")
-                  for k in positive] + [
+        ranges = {"speed_xy": SPEED, "speed_up": SPEED, "speed_down": SPEED,
+                  "acceleration_xy": ACCELERATION, "derivative_cutoff_hz": RATE}
+        require([(getattr(self, k) in allowed, f"{k}: expected {allowed.describe()}, got "
+                  f"{format_number(getattr(self, k))}") for k, allowed in ranges.items()] + [
             (0 < self.tilt_max_deg < 90, f"tilt_max_deg must be in (0, 90), got "
                                          f"{self.tilt_max_deg}"),
             (0 <= self.thrust_min < self.thrust_max <= 1,
              f"expected 0 <= thrust_min < thrust_max <= 1, got {self.thrust_min} and "
              f"{self.thrust_max}"),
-            (bool(np.all(self.rate_max_deg > 0)), "rate_max_deg must be > 0"),
+            (all(float(v) in RATE_MAX for v in self.rate_max_deg),
+             f"rate_max_deg: expected each value {RATE_MAX.describe()}, got "
+             f"{_listed(self.rate_max_deg)}"),
         ])
 
 
@@ -131,6 +146,9 @@ class Gains:
     rate: PID = field(default_factory=lambda: _pid(
         (40.0, 40.0, 15.0), (10.0, 10.0, 5.0), (0.3, 0.3, 0.0), (30.0, 30.0, 10.0)))
     limits: Limits = field(default_factory=Limits)
+
+    def __post_init__(self) -> None:
+        require(gain_checks(self, ("attitude_kp",)))
 
     def replace(self, **changes: object) -> Gains:
         """A copy with some fields changed (see :func:`dataclasses.replace`)."""

@@ -38,6 +38,7 @@ from numba import njit
 from quadnav.arrays import FloatArray
 from quadnav.config import frozen_vector, require, vector_field
 from quadnav.control.contract import SATURATED, Controller
+from quadnav.control.gains import gain_checks
 from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import VehicleArrays
@@ -49,7 +50,7 @@ MEMORY_SIZE = 1
 
 @dataclass(frozen=True, eq=False)
 class SE3Gains:
-    """The geometric controller's gains, per axis (3,), each >= 0 (defaults: rotorpy's
+    """The geometric controller's gains, per axis (3,), each from 0 to 10,000 (defaults: rotorpy's
     ``SE3Control``'s before rotorpy 3.0, with a gentler yaw; see the module docstring).
 
     Attributes:
@@ -67,8 +68,7 @@ class SE3Gains:
     def __post_init__(self) -> None:
         for k in ("kx", "kv", "kr", "kw"):  # any three numbers, kept as read-only arrays
             object.__setattr__(self, k, frozen_vector(getattr(self, k), 3))
-        require([(bool(np.all(getattr(self, k) >= 0)), f"{k} must be >= 0, got "
-                  f"{getattr(self, k).tolist()}") for k in ("kx", "kv", "kr", "kw")])
+        require(gain_checks(self, ("kx", "kv", "kr", "kw")))
 
 
 class SE3GainArrays(NamedTuple):
