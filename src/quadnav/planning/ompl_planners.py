@@ -14,8 +14,9 @@ What OMPL 2.0.1's bindings allow, and so what these functions do:
 * **Settings.** ``time_limit``; ``step`` as the range of RRT*, Informed RRT* and RRT-Connect
   (pass ``step = 0.2 * diagonal`` of the inflated boundary for OMPL's own default);
   ``goal_bias`` for RRT* and Informed RRT*; ``rewire_factor`` for RRT*, Informed RRT* and
-  BIT*; ``max_iterations`` for RRT*, Informed RRT* and BIT* (the planners that count their
-  iterations; RRT-Connect and PRM* ignore it); ``stop_at_first`` as a cost threshold of
+  BIT*; ``max_iterations`` and ``improve_iterations`` for RRT*, Informed RRT* and BIT* (the
+  planners that count their iterations: quadnav's RRT* stopping rule; RRT-Connect and PRM*
+  ignore them); ``stop_at_first`` as a cost threshold of
   +inf, which any solution meets. ``goal_tolerance`` and ``informed`` are ignored: the goal
   is reached exactly, and the planner's name says whether it samples informed.
 * **Seeds.** OMPL seeds each random generator it creates from one process-wide seed
@@ -196,40 +197,50 @@ def _report(progress: Progress | None, elapsed: float, settings: PlannerSettings
 
 
 def _solve_polled(planner: ob.Planner, pdef: ob.ProblemDefinition, settings: PlannerSettings,
-                  progress: Progress | None) -> tuple[_History, float]:
-    """Search under a Python termination condition that OMPL evaluates every iteration.
+                  progress: Progress | None) -> tuple[_History, float, str]:
+    """Search under a Python termination condition that OMPL evaluates every iteration:
+    the time limit and, for a planner that counts its iterations, quadnav's own sample
+    rule (:meth:`~quadnav.planning.settings.PlannerSettings.limit_after_first`: the cap,
+    and ``improve_iterations`` after the first solution), as RRT* stops.
 
-    Returns the improvements of the planner's best cost and the search's wall time, s.
+    Returns the improvements of the planner's best cost, the search's wall time, s, and
+    what stopped it (``"time"``, ``"iterations"`` or ``"improvement"``).
     """
     best_cost = getattr(planner, "bestCost", None)
     iterations = getattr(planner, "numIterations", None)
-    limit = settings.max_iterations if iterations is not None else None
+    cap = settings.max_iterations or math.inf
+    limit = cap if iterations is not None else math.inf
     history: _History = []
     next_report = PROGRESS_PERIOD
     clock = time.perf_counter()
 
     def done() -> bool:
-        nonlocal next_report
+        nonlocal next_report, limit
         elapsed = time.perf_counter() - clock
         if best_cost is not None:
             cost = best_cost().value()
             if cost < (history[-1][1] if history else math.inf):
+                if not history and iterations is not None:
+                    limit = settings.limit_after_first(iterations())
                 history.append((elapsed, cost))
         if elapsed >= next_report:
             next_report = elapsed + PROGRESS_PERIOD
             _report(progress, elapsed, settings, history)
         return elapsed >= settings.time_limit or (
-            limit is not None and iterations() >= limit)
+            iterations is not None and iterations() >= limit)
 
     planner.solve(ob.PlannerTerminationCondition(done))
-    return history, time.perf_counter() - clock
+    seconds = time.perf_counter() - clock
+    if iterations is None or iterations() < limit:
+        return history, seconds, "time"
+    return history, seconds, "iterations" if iterations() >= cap else "improvement"
 
 
 def _solve_sliced(planner: ob.Planner, pdef: ob.ProblemDefinition, settings: PlannerSettings,
-                  progress: Progress | None) -> tuple[_History, float]:
+                  progress: Progress | None) -> tuple[_History, float, str]:
     """Search under OMPL's timed termination condition: until the first solution, then in
-    slices of the budget left. Returns the lengths after each slice that improved, and
-    the search's wall time, s."""
+    slices of the budget left. Returns the lengths after each slice that improved, the
+    search's wall time, s, and what stopped it: ``"time"`` (PRM* counts no samples)."""
     objective = pdef.getOptimizationObjective()
     threshold = objective.getCostThreshold()
     objective.setCostThreshold(ob.Cost(math.inf))
@@ -247,7 +258,7 @@ def _solve_sliced(planner: ob.Planner, pdef: ob.ProblemDefinition, settings: Pla
                 history.append((elapsed, length))
             objective.setCostThreshold(threshold)
         _report(progress, elapsed, settings, history)
-    return history, elapsed
+    return history, elapsed, "time"
 
 
 def _solution(world: World, pdef: ob.ProblemDefinition, goal: FloatArray) -> FloatArray | None:
@@ -324,7 +335,7 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
         planner = _planner(name, si, pdef, settings, settings.step_for(world))
         setup_seconds = time.perf_counter() - setup_began
         solve = _solve_sliced if name in _THREADED else _solve_polled
-        history, seconds = solve(planner, pdef, settings, progress)
+        history, seconds, stopped_by = solve(planner, pdef, settings, progress)
         search_path = _solution(world, pdef, problem.search_goal)
         nodes, parents = ((np.zeros((0, 3)), np.zeros(0, dtype=np.int64))
                           if name in _GRAPH_KEPT_FOREVER else _tree(planner, si))
@@ -333,11 +344,10 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
         history = []
     elif not history or path_length(search_path) < history[-1][1]:
         history.append((seconds, path_length(search_path)))
-    capped = bool(settings.max_iterations) and iterations >= settings.max_iterations
     stats = PlanStats(iterations=int(iterations), nodes=len(nodes), seconds=seconds,
                       time_to_first=history[0][0] if history else None,
                       cost_history=np.array(history).reshape(-1, 2),
-                      stopped_by="iterations" if capped else "time",
+                      stopped_by=stopped_by,
                       setup_seconds=setup_seconds)
     return PlanResult(
         planner=OMPL_PREFIX + name,
