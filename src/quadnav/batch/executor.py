@@ -35,6 +35,8 @@ import os
 import signal
 import socket
 import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
@@ -95,16 +97,31 @@ class _Closing:
 _shared: Any = None
 
 
-def _start_worker(shared: Any, warm_up: WarmUp | None, threads: int) -> None:
-    """Initializer of a local worker: ignore stop signals, set numba's ``threads``, keep
-    ``shared``, warm up."""
+#: How often a local worker looks whether the process that started it is still there, s.
+PARENT_CHECK_PERIOD = 0.5
+
+
+def _start_worker(shared: Any, warm_up: WarmUp | None, threads: int, parent: int) -> None:
+    """Initializer of a local worker: ignore stop signals, leave when ``parent`` (the
+    batch's process id) is gone, set numba's ``threads``, keep ``shared``, warm up."""
     global _shared
     for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
+    threading.Thread(target=_leave_with, args=(parent,), daemon=True,
+                     name="quadnav-parent-watch").start()
     use_numba_threads(threads)
     _shared = shared
     if warm_up is not None:
         warm_up(shared)
+
+
+def _leave_with(parent: int) -> None:
+    """In a worker: end the process once ``parent`` is gone (the worker is then someone
+    else's child). A worker ignores stop signals, so a batch killed with SIGKILL (the OOM
+    killer, a CI time-out) left its workers, about 220 MB each, running for good."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_CHECK_PERIOD)
+    os._exit(1)
 
 
 def _call(function: Job, item: Any) -> Any:
@@ -120,7 +137,8 @@ class LocalExecutor(_Closing):
         self.numba_threads = threads or numba_threads(self.workers)
         self._pool = ProcessPoolExecutor(
             self.workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_start_worker, initargs=(shared, warm_up, self.numba_threads))
+            initializer=_start_worker,
+            initargs=(shared, warm_up, self.numba_threads, os.getpid()))
 
     def map_unordered(self, function: Job, items: Sequence[Any]
                       ) -> Iterator[tuple[int, Any]]:
