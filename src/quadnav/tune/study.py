@@ -8,9 +8,10 @@ first trial of a new study is the vehicle's own gains (:func:`~.space.starting_p
 so the best trial is never worse than where the search began.
 
 The study lives in an Optuna RDB storage (a SQLite file by default), so an interrupted
-study resumes where it stopped: trials left running by the interruption are marked
-failed and asked again. (The sampler's random state is not stored, so a resumed study
-goes on differently from one never interrupted.)
+study resumes where it stopped: trials left running by the interruption (with all, some or
+none of their parameters written) are marked failed and asked again, and the search space
+is compared on the finished trials alone. (The sampler's random state is not stored, so a
+resumed study goes on differently from one never interrupted.)
 """
 
 from __future__ import annotations
@@ -62,7 +63,8 @@ def open_study(settings: StudySettings, knobs: tuple[Knob, ...],
     """The study named ``settings.name`` in ``settings.storage``, created (with ``start``
     enqueued as its first trial) or loaded; trials an interruption left running are
     marked failed. QuadnavError (one line) when the storage cannot be opened, or holds a
-    study of that name over other knobs."""
+    study of that name whose finished trials searched other knobs (checked before anything
+    is changed)."""
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
         study = optuna.create_study(storage=settings.storage, study_name=settings.name,
@@ -71,14 +73,16 @@ def open_study(settings: StudySettings, knobs: tuple[Knob, ...],
     except Exception as error:  # SQLAlchemy's and Optuna's errors alike
         raise QuadnavError(f"cannot open the study storage {settings.storage}: "
                            f"{str(error).splitlines()[0]}") from None
+    trials = study.get_trials(deepcopy=False)
     names = {knob.name for knob in knobs}
-    for trial in study.get_trials(deepcopy=False):
-        if trial.params and set(trial.params) != names:
-            raise QuadnavError(f"study {settings.name!r} in {settings.storage} searches other "
-                               "gains (another --space); give another --study or --storage")
-        if trial.state in (TrialState.RUNNING, TrialState.WAITING) and trial.params:
+    if any(set(trial.params) != names for trial in trials
+           if trial.state == TrialState.COMPLETE):
+        raise QuadnavError(f"study {settings.name!r} in {settings.storage} searches other "
+                           "gains (another --space); give another --study or --storage")
+    for trial in trials:  # asked but never told: a stop came first, perhaps mid-way
+        if trial.state == TrialState.RUNNING:  # through writing its parameters
             study.tell(trial.number, state=TrialState.FAIL)
-    if not study.get_trials(deepcopy=False):
+    if not trials:
         study.enqueue_trial(start)
     return study
 
