@@ -18,6 +18,8 @@ from __future__ import annotations
 import json
 import json.decoder
 import json.scanner
+import math
+import warnings
 from typing import Any
 
 from quadnav.errors import MapError
@@ -41,10 +43,10 @@ class _LocatedDict(dict):
 
 
 class _Literal(float):
-    """A JSON number that remembers how the file wrote it (to name a number too large for a
-    float by its digits, not as ``inf``)."""
+    """A JSON number too large for a float that remembers how the file wrote it (to name it
+    by its digits, not as ``inf``)."""
 
-    text: str
+    __slots__ = ("text",)
 
 
 class _RefusedError(ValueError):
@@ -58,13 +60,17 @@ class _RefusedError(ValueError):
 
 
 def _read_number(text: str) -> float:
-    """A JSON number's value; :class:`_RefusedError` for one written with digits other than
-    ASCII's (Python's JSON scanner matches any Unicode digit)."""
+    """A JSON number's value (a :class:`_Literal` keeping its digits when it is too large
+    for a float); :class:`_RefusedError` for one written with digits other than ASCII's
+    (Python's pure-Python JSON scanner matches any Unicode digit)."""
     if not text.isascii():
         raise _RefusedError(f"expected a number in ASCII digits, got {text!r}", token=text)
-    value = _Literal(text)
-    value.text = text
-    return value
+    value = float(text)
+    if math.isfinite(value):
+        return value
+    literal = _Literal(text)
+    literal.text = text
+    return literal
 
 
 def _decode_with_lines(text: str) -> Any:
@@ -139,9 +145,35 @@ def _box(obj: Any, source: str, what: str, boundary: bool = False) -> list[float
 
 
 def parse_json_map(text: str, source: str) -> World:
-    """Parse the text of a JSON map; raises MapError naming ``source`` and the line."""
+    """Parse the text of a JSON map; raises MapError naming ``source`` and the line.
+
+    A map is read first by Python's compiled JSON decoder, which knows no lines; a map
+    that reads cleanly (no error, no warning) is done. Otherwise it is read again by the
+    line-tracking decoder, whose errors and warnings name the line of each object."""
     if not text.strip():
         raise MapError(source, "empty map: expected a JSON object with \"bounds\"")
+    try:
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            world = _interpret(json.loads(text, object_pairs_hook=_unique_keys,
+                                          parse_int=float), source)
+        if not said:
+            return world
+    except (ValueError, RecursionError, MapError):  # JSONDecodeError is a ValueError
+        pass
+    return _parse_with_lines(text, source)
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
+    """An object of the compiled decoder; ValueError for a key given twice."""
+    data = dict(pairs)
+    if len(data) < len(pairs):
+        raise ValueError("a key given twice")
+    return data
+
+
+def _parse_with_lines(text: str, source: str) -> World:
+    """:func:`parse_json_map` by the line-tracking decoder."""
     try:
         data = _decode_with_lines(text)
     except json.JSONDecodeError as error:
@@ -151,6 +183,11 @@ def parse_json_map(text: str, source: str) -> World:
         raise MapError(source, str(refused), refused.line) from None
     except RecursionError:
         raise MapError(source, "broken JSON: nested too deeply") from None
+    return _interpret(data, source)
+
+
+def _interpret(data: Any, source: str) -> World:
+    """The World of a decoded JSON map (objects carry their line, or none)."""
     if not isinstance(data, dict):
         raise MapError(source, "expected a JSON object at the top level", 1)
     if "bounds" not in data:
