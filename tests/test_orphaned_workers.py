@@ -9,6 +9,7 @@ import subprocess
 import time
 from pathlib import Path
 
+import pytest
 from clitools import QUADNAV
 
 #: Longest wait for the workers to start, or to leave once the batch is gone, s: a bound on
@@ -64,3 +65,24 @@ def test_workers_leave_when_the_batch_is_killed(tmp_path):
         for pid in [batch.pid, *workers]:
             if alive(pid):
                 os.kill(pid, signal.SIGKILL)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGTERM])
+def test_a_stopped_process_group_says_one_line_and_nothing_else(tmp_path, signum):
+    """A closed terminal or a job control stop reaches the batch, its workers and
+    multiprocessing's resource tracker at once: the batch's one line, no worker's traceback,
+    no resource tracker's "process died unexpectedly", no "leaked semaphore"."""
+    batch = subprocess.Popen([*QUADNAV, "batch", "forest", "--seeds", "500", "--workers", "2",
+                              "--quiet", "-o", str(tmp_path / "b")],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    try:
+        assert wait_for(lambda: len(children(batch.pid)) >= 3), "the workers never started"
+        os.killpg(batch.pid, signum)
+        _, errors = batch.communicate(timeout=PATIENCE)
+    finally:
+        if batch.poll() is None:
+            os.killpg(batch.pid, signal.SIGKILL)
+    assert batch.returncode == 128 + signum
+    lines = errors.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("quadnav: stopped: kept "), errors

@@ -40,6 +40,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
+from multiprocessing import resource_tracker
 from types import TracebackType
 from typing import Any, Protocol
 
@@ -124,6 +125,21 @@ def _leave_with(parent: int) -> None:
     os._exit(1)
 
 
+def _start_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (which the pool's queues and locks use)
+    ignoring every stop signal, as the workers do: it ignores SIGINT and SIGTERM itself,
+    but a SIGHUP to the whole process group (a closed terminal) ended it, and multiprocessing
+    then printed a traceback and "process died unexpectedly ... resources might leak". An
+    ignored signal stays ignored in the process started now."""
+    if not hasattr(signal, "SIGHUP"):
+        return
+    held = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        signal.signal(signal.SIGHUP, held)
+
+
 def _call(function: Job, item: Any) -> Any:
     return function(_shared, item)
 
@@ -135,6 +151,7 @@ class LocalExecutor(_Closing):
                  workers: int | None = None, threads: int | None = None) -> None:
         self.workers = workers or cpu_count()
         self.numba_threads = threads or numba_threads(self.workers)
+        _start_resource_tracker()
         self._pool = ProcessPoolExecutor(
             self.workers, mp_context=multiprocessing.get_context("spawn"),
             initializer=_start_worker,
