@@ -37,6 +37,9 @@ SMALL = "forest:size=12x12x4,seed=2"
 MAX_PAGE_BYTES = 3_000_000
 #: Fewest distinct colours in a screenshot of a drawn scene (a blank canvas has one).
 MIN_COLOURS = 500
+#: One worker runs this module: the browser and the module fixtures' runs are made once.
+pytestmark = pytest.mark.xdist_group("viewer-browser")
+
 #: The flown track's colour in the page (viewer.js: FLOWN).
 FLOWN_RGB = (17, 17, 17)
 READOUT = re.compile(r"t = ([\d.]+) s\s+position \(([-\d.]+), ([-\d.]+), ([-\d.]+)\) m"
