@@ -19,6 +19,19 @@ OUTPUTS = ("metrics.json", "path.csv", "trajectory.csv", "flight.csv", "flight_3
 SMALL = "forest:size=12x12x4,seed=2"
 
 
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    """``fly SMALL --strict`` (seed 0, no figures): its folder and result, for the tests that
+    read a plain run of it (--strict changes only the exit code of a flight short of the
+    margin, which this one is not)."""
+    folder = tmp_path_factory.mktemp("small") / "out"
+    return folder, run_here("fly", SMALL, "-o", folder, "--quiet", "--no-figures", "--strict")
+
+
+#: The tests that read ``small_run``: on one worker, which flies it once.
+SMALL_RUN = pytest.mark.xdist_group("fly-cli-small-run")
+
+
 def test_fly_on_the_default_world_writes_every_output(tmp_path):
     result = run("fly", "-o", tmp_path / "out", "--quiet")
     assert result.returncode == 0, result.stderr
@@ -133,11 +146,12 @@ def test_a_start_inside_a_block_is_a_user_error(tmp_path, shared_maps):
     assert not out.exists()
 
 
-def test_a_run_folder_reads_back(tmp_path):
+@SMALL_RUN
+def test_a_run_folder_reads_back(small_run):
     from quadnav.runs import read_run
 
-    out = tmp_path / "out"
-    assert run_here("fly", SMALL, "-o", out, "--quiet", "--no-figures").returncode == 0
+    out, result = small_run
+    assert result.returncode == 0, result.stderr
     record = read_run(out)
     metrics = json.loads((out / "metrics.json").read_text())
     assert record.metrics == metrics
@@ -161,12 +175,15 @@ def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):
         read_run(tmp_path)
 
 
-def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(tmp_path):
-    results = {}
-    for name, extra in (("calm", []), ("windy", ["--wind", "0.03", "0", "0", "--gusts", "0.01"])):
-        out = tmp_path / name
-        assert run_here("fly", SMALL, *extra, "-o", out, "--quiet", "--no-figures").returncode == 0
-        results[name] = json.loads((out / "metrics.json").read_text())
+@SMALL_RUN
+def test_wind_and_gusts_disturb_the_flight_but_it_still_arrives(small_run, tmp_path):
+    calm, result = small_run
+    assert result.returncode == 0, result.stderr
+    results = {"calm": json.loads((calm / "metrics.json").read_text())}
+    out = tmp_path / "windy"
+    assert run_here("fly", SMALL, "--wind", "0.03", "0", "0", "--gusts", "0.01", "-o", out,
+                    "--quiet", "--no-figures").returncode == 0
+    results["windy"] = json.loads((out / "metrics.json").read_text())
     assert results["windy"]["success"]
     # A 0.03 N wind and 0.01 N gusts add a centimetre or so of tracking error.
     assert results["windy"]["rms_tracking_error_m"] > results["calm"]["rms_tracking_error_m"] + 0.005
@@ -205,12 +222,12 @@ def test_a_flight_short_of_the_margin_says_so_in_a_warning_and_strict_fails_it(t
         "quadnav: flight failed: it kept less margin than asked (--strict)")
 
 
-def test_a_flight_that_keeps_the_margin_gives_no_warning_even_when_strict(tmp_path):
-    result = run_here("fly", SMALL, "-o", tmp_path / "out", "--quiet", "--no-figures",
-                      "--strict")
+@SMALL_RUN
+def test_a_flight_that_keeps_the_margin_gives_no_warning_even_when_strict(small_run):
+    out, result = small_run
     assert result.returncode == 0, result.stderr
     assert "margin asked" not in result.stderr
-    metrics = json.loads((tmp_path / "out/metrics.json").read_text())
+    metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["flight_margin_m"] > metrics["margin_m"] + 0.01
     assert metrics["margin_shortfall_m"] == 0.0
 

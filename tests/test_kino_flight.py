@@ -154,6 +154,21 @@ def test_kino_fly_writes_the_run_folder_fly_writes(tmp_path, capsys):
         assert (out / "flight" / name).stat().st_size > 1000
 
 
+def test_kino_fly_without_figures_writes_the_rest_and_no_earlier_figures_stay(tmp_path, capsys):
+    out = tmp_path / "kino"
+    (out / "flight").mkdir(parents=True)
+    for name in ("kino.png", "controls.png", "flight/flight_3d.png", "flight/report.html"):
+        (out / name).write_text("an earlier run's")
+    assert main(["kino", "quadrotor", "forest:size=8x8x3,seed=1", "--fly", "--no-figures",
+                 "--quiet", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[-1].startswith(f"wrote {out / 'flight' / 'metrics.json'}, ")
+    assert sorted(path.name for path in out.iterdir()) == [
+        "controls.csv", "flight", "kino.json", "states.csv"]
+    assert not [path.name for path in (out / "flight").iterdir() if path.suffix in (".png", ".html")]
+    assert read_run(out / "flight").flight is not None
+
+
 @pytest.mark.parametrize("which", ["forest", "test_window"])
 def test_kino_fly_ends_within_the_goal_radius_of_the_goal_asked_for(which, tmp_path, capsys,
                                                                      request):
@@ -164,7 +179,7 @@ def test_kino_fly_ends_within_the_goal_radius_of_the_goal_asked_for(which, tmp_p
             str(request.getfixturevalue("shared_maps") / "meam620" / "test_window.json"))
     goal = load_world(spec).goal
     out = tmp_path / "kino"
-    code = main(["kino", "quadrotor", spec, "--fly", "--quiet", "-o", str(out)])
+    code = main(["kino", "quadrotor", spec, "--fly", "--no-figures", "--quiet", "-o", str(out)])
     printed = capsys.readouterr().out
     assert code == 0, printed
     run = read_run(out / "flight")
@@ -181,7 +196,7 @@ def test_kino_fly_ends_within_the_goal_radius_of_the_goal_asked_for(which, tmp_p
 
 def test_a_kino_flight_short_of_the_margin_says_so_and_strict_fails_it(tmp_path, capsys):
     # window (seed 0): the flight keeps 0.168 m of the 0.2 m margin, 32 mm short
-    code = main(["kino", "quadrotor", "window", "--fly", "--quiet", "--strict",
+    code = main(["kino", "quadrotor", "window", "--fly", "--no-figures", "--quiet", "--strict",
                  "-o", str(tmp_path / "kino")])
     err = capsys.readouterr().err.splitlines()
     metrics = json.loads((tmp_path / "kino" / "flight" / "metrics.json").read_text())

@@ -19,7 +19,7 @@ OPTIMIZING = ("RRTstar", "InformedRRTstar", "BITstar", "PRMstar")
 #: A seed with which every planner finds the window world's first path within ~0.05 s.
 WINDOW_SEED = 11
 #: Search budget, s: ample on a busy machine for the ~0.05 s the searches need.
-BUDGET = 1.0
+BUDGET = 0.5
 
 
 def builtin_problem(spec: str):
@@ -60,8 +60,10 @@ def assert_forest(result, problem) -> None:
     assert np.all((parents >= -1) & (parents < len(parents)))
     assert problem.free_world.segments_free(result.tree_edges()).all()
     vertex = np.arange(len(parents))
-    for _ in range(len(parents)):
+    for _ in range(len(parents)):  # every root is reached within as many steps, or a cycle
         vertex = np.where(vertex >= 0, parents[np.maximum(vertex, 0)], -1)
+        if np.all(vertex < 0):
+            break
     assert np.all(vertex < 0), "a cycle in the tree"
 
 

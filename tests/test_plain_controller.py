@@ -136,8 +136,9 @@ def test_rotorpys_se3control_agrees_with_quadnavs_se3_on_a_public_course_map(sha
 
 def test_speeds_thrusts_and_moments_of_one_controller_fly_one_flight():
     """rotorpy's SE3Control by motor speeds, rotor thrusts and thrust with moments: three
-    forms of the same commands, one flight (quadnav's mixer meets the wrench exactly)."""
-    helix = load_reference("helix:radius=1,speed=1")
+    forms of the same commands, one flight (quadnav's mixer meets the wrench exactly): half
+    a lap of the helix, climbing and turning about every axis as the whole one does."""
+    helix = load_reference("helix:radius=1,speed=1,laps=0.5")
     flights = [simulate(helix, TELLO, settings=PYTHON_RATE, controller=make_controller(
         f"{SE3CONTROL}(control_abstraction={name!r})", TELLO))
         for name in ("cmd_motor_speeds", "cmd_motor_thrusts", "cmd_ctbm")]

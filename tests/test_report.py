@@ -21,6 +21,9 @@ from quadnav.report.run_writer import write_run
 from quadnav.runs import FIGURES, REPORT
 from quadnav.world import load_world
 
+#: One worker runs this module: the runs of the module fixtures are made once.
+pytestmark = pytest.mark.xdist_group("report-runs")
+
 SMALL = "forest:size=12x12x4,seed=2"
 IMAGE = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)" '
                    r'width="(\d+)" height="(\d+)"')

@@ -94,11 +94,23 @@ def _every_path(folder: Path) -> list[tuple]:
     return cases
 
 
+@functools.cache
+def _map1(folder: Path) -> tuple:
+    """(world, margin, refined path) of rbe595/map1.txt with the course's start and goal."""
+    world, start, goal, margin = course_query(folder, "rbe595/map1.txt")
+    return world, margin, _planned(world, start, goal, margin)
+
+
 @pytest.fixture
 def every_path(shared_maps):
     return _every_path(shared_maps)
 
 
+#: The tests that share the planned paths run on one worker, which plans them once.
+SHARED_PATHS = pytest.mark.xdist_group("trajectory-timing-paths")
+
+
+@SHARED_PATHS
 def test_every_map_flies_near_the_rest_to_rest_bound_never_backing_up(every_path):
     ratios = {}
     for name, world, margin, path in every_path:
@@ -123,6 +135,7 @@ def test_every_map_flies_near_the_rest_to_rest_bound_never_backing_up(every_path
     assert values.max() <= MOST_ABOVE_BOUND
 
 
+@SHARED_PATHS
 @pytest.mark.parametrize("method", [m for m in METHODS if m != "minsnap"])
 def test_no_method_backs_up_on_any_map(every_path, method):
     for name, world, margin, path in every_path:
@@ -133,10 +146,10 @@ def test_no_method_backs_up_on_any_map(every_path, method):
         assert kept >= margin - CHECK_TOLERANCE, (name, method, kept)
 
 
+@SHARED_PATHS
 @pytest.mark.parametrize("method", METHODS.names())
 def test_every_method_cruises_on_map1(shared_maps, method):
-    world, start, goal, margin = course_query(shared_maps, "rbe595/map1.txt")
-    path = _planned(world, start, goal, margin)
+    world, margin, path = _map1(shared_maps)
     trajectory = make_trajectory(path, TrajectorySettings(method=method, v_max=2.0),
                                  SafeSpace(world, margin))
     length = curve_length(trajectory)
@@ -174,10 +187,10 @@ def test_a_bad_profile_input_is_refused():
         TrajectorySettings(timing="quick")
 
 
+@SHARED_PATHS
 def test_corridors_on_map1_at_the_default_limits(shared_maps):
     # Once "Clarabel: InsufficientProgress" on the README's own map1 path.
-    world, start, goal, margin = course_query(shared_maps, "rbe595/map1.txt")
-    path = _planned(world, start, goal, margin)
+    world, margin, path = _map1(shared_maps)
     trajectory = make_trajectory(path, TrajectorySettings(corridor=True),
                                  SafeSpace(world, margin))
     kept, _ = trajectory_margins(trajectory, world)

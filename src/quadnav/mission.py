@@ -414,16 +414,36 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
     """:func:`fly_mission` for a query already checked by
     :func:`~quadnav.planning.make_problem` (so bad input fails before any work)."""
     settings = settings or MissionSettings()
-    world = problem.world
     warn_if_margin_too_small(problem.margin, settings.vehicle)
+    return fly_plan(plan_mission(problem, settings, planning_progress), settings,
+                    flight_progress)
+
+
+def plan_mission(problem: PlanningProblem, settings: MissionSettings,
+                 progress: Callable[[float, float], None] | None = None) -> Mission:
+    """The planning stage of :func:`fly_problem`: the path found (and refined), with
+    neither trajectory nor flight yet, to fly with :func:`fly_plan`."""
     began = time.perf_counter()
-    result = plan(problem, settings.planning, settings.planner, planning_progress)
+    result = plan(problem, settings.planning, settings.planner, progress)
     raw_length = result.length
     if settings.refine and result.solved:  # a class of your own rounds the corners itself
         result = refine(problem, result, smooth=settings.reference is None)
     timings = {"planning": time.perf_counter() - began}
+    return Mission(problem, result, raw_length, None, None, timings, settings)
+
+
+def fly_plan(planned: Mission, settings: MissionSettings | None = None,
+             flight_progress: Callable[[float], None] | None = None) -> Mission:
+    """The rest of :func:`fly_problem` after :func:`plan_mission`: the trajectory along
+    ``planned``'s path and its flight, with ``settings`` (default: ``planned``'s own; the
+    same planning settings, as the path was found with them). An unsolved plan is
+    returned as it is."""
+    settings = settings or planned.settings
+    problem, result, raw_length = planned.problem, planned.plan, planned.raw_length
+    world = problem.world
+    timings = {"planning": planned.timings["planning"]}
     if not result.solved:
-        return Mission(problem, result, raw_length, None, None, timings, settings)
+        return dataclasses.replace(planned, settings=settings)
     began = time.perf_counter()
     if settings.reference is None:
         trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,

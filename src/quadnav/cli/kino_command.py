@@ -335,11 +335,11 @@ def quadrotor(args: argparse.Namespace) -> int:
     track = None if flown is None else flown.flight.position
     figures = {"kino.png": lambda: quadrotor_figure(world, result, model, goal, track),
                "controls.png": lambda: quadrotor_controls_figure(result, model)}
-    written = write_outputs(folder, result, data, tables, figures)
+    written = write_outputs(folder, result, data, tables, {} if args.no_figures else figures)
     code = finish(folder, world.name, [(sampling(settings), result)], written)
     if flown is None:
         return code
-    return write_flight(flown, folder / FLIGHT_FOLDER, args.strict)
+    return write_flight(flown, folder / FLIGHT_FOLDER, args.strict, not args.no_figures)
 
 
 def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
@@ -356,10 +356,12 @@ def fly_plan(args: argparse.Namespace, world: World, result: KinoResult,
                              args.controller, progress)
 
 
-def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
-    """Write the run folder of the flight, print its headline figures (and a warning line
-    when it kept less margin than asked); 0 when it succeeded (and, if ``strict``, kept the
-    whole margin), else :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
+def write_flight(flown: KinoFlight, folder: Path, strict: bool = False,
+                 figures: bool = True) -> int:
+    """Write the run folder of the flight (with its figures and report if ``figures``),
+    print its headline figures (and a warning line when it kept less margin than asked); 0
+    when it succeeded (and, if ``strict``, kept the whole margin), else
+    :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
     from quadnav.cli.flight_lines import (
         flight_failed,
         min_clearance,
@@ -374,7 +376,7 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False) -> int:
     content = RunContent(flown.world, m, flown.parameters(),
                          (result.tree_states[:, :3], result.tree_parents),
                          result.states[:, :3], flown.trajectory, flown.flight)
-    written = write_run(content, folder)
+    written = write_run(content, folder, figures=figures)
     print(f"flown closed loop by the {flown.controller} controller on the {m['vehicle']} "
           f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
           f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, ending with a "
@@ -475,6 +477,9 @@ def add_kino_command(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--fly", action="store_true",
                    help="also fly the plan closed loop on the simulated vehicle and write "
                         "its run folder to DIR/flight (exit 1 if the flight fails)")
+    p.add_argument("--no-figures", action="store_true",
+                   help="skip kino.png, controls.png and the flight's figures and report "
+                        "(quadnav report DIR/flight writes the report later)")
     add_strict_argument(p)
     add_vehicle_arguments(p)
     add_controller_argument(p)
