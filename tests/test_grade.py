@@ -20,6 +20,10 @@ from pathlib import Path
 import pytest
 from clitools import QUADNAV, run_here
 
+#: One worker for the module, so that its module-scoped fixtures are built once under
+#: --dist loadgroup (each test apart would build them on each worker).
+pytestmark = pytest.mark.xdist_group("grade")
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: Two shipped course maps with their queries; a cheap search budget for the baseline, and
 #: the plain-Python controllers run at 250 Hz (a quarter of the steps of 1 kHz's).
