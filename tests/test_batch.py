@@ -23,6 +23,10 @@ from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import load_world
 
+#: One worker for the module, so that its module-scoped fixtures are built once under
+#: --dist loadgroup (each test apart would build them on each worker).
+pytestmark = pytest.mark.xdist_group("batch")
+
 
 @pytest.fixture(scope="module")
 def batch(tmp_path_factory):

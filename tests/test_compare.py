@@ -25,6 +25,10 @@ from quadnav.batch.compare_page import leaderboard_figure
 from quadnav.batch.summary_page import breakable
 from quadnav.batch.table import read_rows
 
+#: One worker for the module, so that its module-scoped fixtures are built once under
+#: --dist loadgroup (each test apart would build them on each worker).
+pytestmark = pytest.mark.xdist_group("compare")
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 PLANNER = "plain_planner.py:graph_search(resolution=0.5)"
 # A steady side wind (0.11 N on the 80 g Tello): the cascade's integral holds the goal (the

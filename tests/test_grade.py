@@ -20,8 +20,13 @@ from pathlib import Path
 import pytest
 from clitools import QUADNAV, run_here
 
+#: One worker for the module, so that its module-scoped fixtures are built once under
+#: --dist loadgroup (each test apart would build them on each worker).
+pytestmark = pytest.mark.xdist_group("grade")
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-#: Two shipped course maps with their queries; a cheap search budget for the baseline.
+#: Two shipped course maps with their queries; a cheap search budget for the baseline, and
+#: the plain-Python controllers run at 250 Hz (a quarter of the steps of 1 kHz's).
 COURSE = """
 seeds = {seeds}
 
@@ -41,6 +46,7 @@ goal = [3.25, 5.25, 1.5]
 
 [mission]
 planner = {{improve = 300}}
+simulation = {{control_rate = 250.0}}
 """
 #: A student's planner that imports a file of the submission by module name: the straight
 #: line on the map of two pillars (through one of them), else the example's graph search.

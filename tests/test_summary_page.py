@@ -26,6 +26,10 @@ from quadnav.batch.summary_page import (
 )
 from quadnav.batch.table import NAMES
 
+#: One worker for the module, so that its module-scoped fixtures are built once under
+#: --dist loadgroup (each test apart would build them on each worker).
+pytestmark = pytest.mark.xdist_group("summary-page")
+
 #: Thirteen course maps as a student keeps them: deep folders, long file names.
 LONG_NAMES = [f"/home/student/courses/rbe595/project{k % 3}/maps/test_sets/set_{k:02d}/"
               f"obstacle_course_with_a_long_descriptive_name_{k:02d}.txt" for k in range(13)]
