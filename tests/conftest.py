@@ -156,3 +156,20 @@ def browser():
                               options=options)
     yield driver
     driver.quit()
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Make ``xdist_group`` marks group again: pytest-xdist 3.8 names a grouped test by
+    setting ``item._nodeid`` (``...@group``), which pytest 9.2's ``nodeid`` no longer reads,
+    so every group was scattered over the workers (and module fixtures such as the Ray
+    cluster built on each). Carry the name over to the id pytest reads; older pytest reads
+    ``_nodeid`` itself."""
+    try:
+        from _pytest.nodeid import NodeId
+    except ImportError:
+        return
+    for item in items:
+        named = item.__dict__.get("_nodeid")
+        if named is not None and named != item.nodeid:
+            item._id = NodeId.parse(named)
