@@ -49,6 +49,9 @@ from quadnav.hardware.stop_signals import StopSignals, signal_name
 from quadnav.signals import Stopped
 from quadnav.world import World
 
+#: One worker flies this module's shared flights (each once, not once per worker).
+pytestmark = pytest.mark.xdist_group("tello-faults")
+
 # --- the lost-link bound -------------------------------------------------------------------
 
 

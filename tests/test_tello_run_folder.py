@@ -37,6 +37,9 @@ from quadnav.runs import DRIFT_FIGURE, drift, read_run
 from quadnav.viz.html_viewer import viewer_data
 from quadnav.world.placement import format_estimate, format_point
 
+#: One worker flies this module's shared flights (each once, not once per worker).
+pytestmark = pytest.mark.xdist_group("tello-run-folder")
+
 
 def quadnav(*args) -> tuple[int, str]:
     """``quadnav ARGS`` in this process: exit code and standard error (output dropped)."""
