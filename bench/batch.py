@@ -106,18 +106,24 @@ def same_results(batch_folder: Path, fly_folder: Path, count: int) -> bool:
     return True
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def study_arguments(description: str) -> tuple[argparse.Namespace, int, int]:
+    """The flags of a batch bench (``--missions``, ``--repeats``, ``--workers``,
+    ``--improve``, ``--quick``), and the missions (a multiple of the maps) and repeats
+    they ask for."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--missions", type=int, default=None, help="missions (20; quick 4)")
     parser.add_argument("--repeats", type=int, default=None, help="repeats (3; quick 1)")
-    parser.add_argument("--workers", type=int, default=2, help="batch workers (2)")
+    parser.add_argument("--workers", type=int, default=2, help="local workers (2)")
     parser.add_argument("--improve", type=int, default=DEFAULT_IMPROVE,
                         help=f"search samples after the first path ({DEFAULT_IMPROVE:,})")
     parser.add_argument("--quick", action="store_true", help="smoke run: 4 missions, once")
     args = parser.parse_args()
     count = args.missions or (4 if args.quick else 20)
-    count -= count % len(MAPS)
-    repeats = args.repeats or (1 if args.quick else 3)
+    return args, count - count % len(MAPS), args.repeats or (1 if args.quick else 3)
+
+
+def main() -> None:
+    args, count, repeats = study_arguments(__doc__.splitlines()[0])
     jobs = missions(count)
     batch_runs, fly_runs, agree = [], [], []
     with tempfile.TemporaryDirectory() as scratch:

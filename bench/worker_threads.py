@@ -17,7 +17,6 @@ ratio), and whether both gave the same rows (wall times aside). Nothing is asser
 
 from __future__ import annotations
 
-import argparse
 import resource
 import statistics
 import sys
@@ -27,14 +26,13 @@ from pathlib import Path
 from typing import Any
 
 import numba
-from batch import MAPS, Measure, write_spec
+from batch import MAPS, Measure, study_arguments, write_spec
 from planning import table
 
 from quadnav.batch.executor import open_executor
 from quadnav.batch.fly_one import fly_row, load_context, warm_up
 from quadnav.batch.grid import read_spec
 from quadnav.batch.table import same_row
-from quadnav.mission import DEFAULT_IMPROVE
 
 
 def fly(spec_path: Path, workers: int, threads: int) -> tuple[Measure, list[dict[str, Any]]]:
@@ -55,17 +53,7 @@ def fly(spec_path: Path, workers: int, threads: int) -> tuple[Measure, list[dict
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--missions", type=int, default=None, help="missions (20; quick 4)")
-    parser.add_argument("--repeats", type=int, default=None, help="repeats (3; quick 1)")
-    parser.add_argument("--workers", type=int, default=2, help="local workers (2)")
-    parser.add_argument("--improve", type=int, default=DEFAULT_IMPROVE,
-                        help=f"search samples after the first path ({DEFAULT_IMPROVE:,})")
-    parser.add_argument("--quick", action="store_true", help="smoke run: 4 missions, once")
-    args = parser.parse_args()
-    count = args.missions or (4 if args.quick else 20)
-    count -= count % len(MAPS)
-    repeats = args.repeats or (1 if args.quick else 3)
+    args, count, repeats = study_arguments(__doc__.splitlines()[0])
     own = numba.config.NUMBA_NUM_THREADS
     runs: dict[int, list[Measure]] = {own: [], 1: []}
     same = []
