@@ -119,6 +119,11 @@ class WrongKeys(PDAttitude):
 """
 
 
+#: The flags that grade a course on its first map alone, double_pillar, with its query.
+PILLAR_ONLY = ["--maps", "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1",
+               "--goal", "-1.1", "3", "1.5"]
+
+
 def submission(folder: Path, tag: str) -> Path:
     """A submission folder: the examples' files (under names of its own: a process keeps
     modules by name) and the student's planner and controllers."""
@@ -254,8 +259,7 @@ def test_a_grade_again_flies_only_what_changed(faulty, tmp_path):
 def test_strict_grading_fails_a_flight_that_kept_less_margin(tmp_path):
     student = submission(tmp_path / "fay", "strict")
     spec = course(tmp_path, 1, "Biased", "search")
-    pillars = ["--maps", "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1",
-               "--goal", "-1.1", "3", "1.5", "--no-baseline", "-o", tmp_path / "out"]
+    pillars = [*PILLAR_ONLY, "--no-baseline", "-o", tmp_path / "out"]
     lenient = run_here("grade", student, "--course", spec, *pillars)
     assert lenient.returncode == 0, lenient.stdout
     row = grade_json(tmp_path / "out")["missions"][0]["submission"]
@@ -290,18 +294,16 @@ def test_a_stopped_grade_keeps_the_missions_finished(tmp_path):
     grade = grade_json(out)
     assert not grade["complete"] and grade["score"] == {"passed": 1, "graded": 1, "total": 2}
     assert "stopped before every mission flew" in (out / "grade.html").read_text()
-    again = run_here("grade", student, "--course", spec, "--no-baseline", "--maps",
-                     "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
-                     "-1.1", "3", "1.5", "-o", out)
+    again = run_here("grade", student, "--course", spec, "--no-baseline", *PILLAR_ONLY,
+                     "-o", out)
     assert again.returncode == 0 and "0 to fly, 1 kept from an earlier grade" in again.stdout
 
 
 def test_a_crash_fails_its_mission_saying_where_and_when(tmp_path):
     student = submission(tmp_path / "hal", "crash")
     spec = course(tmp_path, 1, "Sinking", "search")
-    result = run_here("grade", student, "--course", spec, "--maps",
-                      "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
-                      "-1.1", "3", "1.5", "--no-baseline", "-o", tmp_path / "out")
+    result = run_here("grade", student, "--course", spec, *PILLAR_ONLY, "--no-baseline",
+                      "-o", tmp_path / "out")
     assert result.returncode == 1
     row = grade_json(tmp_path / "out")["missions"][0]["submission"]
     assert row["outcome"] == "crashed", row["reason"]
@@ -312,9 +314,8 @@ def test_a_crash_fails_its_mission_saying_where_and_when(tmp_path):
 def test_wrong_keys_fail_their_mission_with_the_line(tmp_path):
     student = submission(tmp_path / "dan", "keys")
     spec = course(tmp_path, 1, "WrongKeys", "search")
-    result = run_here("grade", student, "--course", spec, "--maps",
-                      "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1", "--goal",
-                      "-1.1", "3", "1.5", "--no-baseline", "-o", tmp_path / "out")
+    result = run_here("grade", student, "--course", spec, *PILLAR_ONLY, "--no-baseline",
+                      "-o", tmp_path / "out")
     assert result.returncode == 1
     row = grade_json(tmp_path / "out")["missions"][0]["submission"]
     assert row["outcome"] == "part error" and row["traceback"] is None
