@@ -111,7 +111,6 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
             if key not in (*POINTS, "map", "seed", "planner")}
     for name in POINTS:
         row |= _point_columns(name, metrics[name])
-    row["search_stopped_by"] = flown.plan.stats.stopped_by
     return row
 
 
