@@ -42,7 +42,7 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     kind = special_file(path)
     if kind is not None:
-        raise QuadnavError(not_a_file(path, kind, "a TOML file"))
+        raise QuadnavError(f"{path}: {not_a_file(kind, 'a TOML file')}")
     try:
         with path.open("rb") as file:
             return tomllib.load(file)

@@ -21,9 +21,10 @@ def special_file(path: str | Path) -> str | None:
         return None
     if stat.S_ISREG(mode):
         return None
-    return next((kind for is_kind, kind in _KINDS if is_kind(mode)), "not a regular file")
+    return next((kind for is_kind, kind in _KINDS if is_kind(mode)), "a special file")
 
 
-def not_a_file(path: str | Path, kind: str, expected: str) -> str:
-    """The message for an input ``path`` that is ``kind`` (see :func:`special_file`)."""
-    return f"{path}: {kind}, not a regular file: expected {expected}"
+def not_a_file(kind: str, expected: str) -> str:
+    """What is wrong with an input that is ``kind`` (see :func:`special_file`), for a
+    message that names the path before it."""
+    return f"{kind}, not a regular file: expected {expected}"

@@ -195,7 +195,7 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
         return params_from_table(read_toml(path), str(path), path.stem)
     kind = special_file(path)
     if kind is not None:
-        raise QuadnavError(not_a_file(spec, kind, "a vehicle TOML file"))
+        raise QuadnavError(f"{spec}: {not_a_file(kind, 'a vehicle TOML file')}")
     if ":" in str(spec):
         return _rotorpy_vehicle(str(spec))
     if path.suffix or len(path.parts) > 1:

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from quadnav.errors import MapError, MapWarning
-from quadnav.inputfiles import special_file
+from quadnav.inputfiles import not_a_file, special_file
 from quadnav.limits import (
     BOUNDARY_SIDE,
     COORDINATE,
@@ -48,7 +48,7 @@ def read_file(path: str | Path) -> bytes:
     over :data:`~quadnav.limits.MAX_FILE_BYTES`."""
     kind = special_file(path)
     if kind is not None:
-        raise MapError(str(path), f"{kind}, not a regular file: expected a file")
+        raise MapError(str(path), not_a_file(kind, "a file"))
     try:
         with Path(path).open("rb") as file:
             data = file.read(MAX_FILE_BYTES + 1)
