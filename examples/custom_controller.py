@@ -13,7 +13,6 @@ built-in forest)
 """
 
 import sys
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -28,30 +27,30 @@ from quadnav.world import load_world
 INTEGRAL = 1  # memory slots 1-3: the integral of the position error, m s
 
 
-class IntegralGains(NamedTuple):
-    se3: SE3GainArrays
-    ki: np.ndarray  # (3,) 1/s^3
-    limit: float  # largest integral, m s
+#: The gains: SE(3)'s, ki ((3,) 1/s^3) and the largest integral (m s). A plain tuple of
+#: quadnav's types, not a class of this file: numba finds its compiled step in its cache
+#: again only for argument types it can import again, and this file runs as __main__.
+IntegralGains = tuple[SE3GainArrays, np.ndarray, float]
 
 
 @njit(cache=True)
 def se3_integral_step(memory, state, reference, g, v, dt):
     """SE(3) with the position reference moved by ki times the integrated error."""
+    se3, ki, limit = g
     shifted = reference.copy()
     for a in range(3):
         error = reference[a] - state[a]
-        memory[INTEGRAL + a] = min(max(memory[INTEGRAL + a] + error * dt, -g.limit), g.limit)
-        shifted[a] += g.ki[a] / max(g.se3.kx[a], 1e-9) * memory[INTEGRAL + a]
-    commands = se3_step(memory[SATURATED:SATURATED + 1], state, shifted, g.se3, v, dt)
+        memory[INTEGRAL + a] = min(max(memory[INTEGRAL + a] + error * dt, -limit), limit)
+        shifted[a] += ki[a] / max(se3.kx[a], 1e-9) * memory[INTEGRAL + a]
+    commands = se3_step(memory[SATURATED:SATURATED + 1], state, shifted, se3, v, dt)
     return commands
 
 
 def se3_integral(vehicle, gains=None) -> Controller:
     """The factory ``--controller`` names call with the vehicle and the controller's own
     gains: here always SE(3)'s defaults and this integral's."""
-    return Controller("se3i", se3_integral_step,
-                      IntegralGains(se3_gain_arrays(SE3Gains()), np.array([4.0, 4.0, 8.0]),
-                                    0.5), 4)
+    gains: IntegralGains = (se3_gain_arrays(SE3Gains()), np.array([4.0, 4.0, 8.0]), 0.5)
+    return Controller("se3i", se3_integral_step, gains, 4)
 
 
 CONTROLLERS.register("se3i", se3_integral)

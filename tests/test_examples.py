@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import runpy
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -13,25 +15,36 @@ import pytest
 from quadnav.control.registry import CONTROLLERS
 from quadnav.planning.registry import PLANNERS
 from quadnav.trajectory.generate import METHODS
+from quadnav.vehicle.dynamics import vehicle_arrays
+from quadnav.vehicle.params import load_params
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@contextmanager
+def registrations_forgotten() -> Iterator[None]:
+    """The names registered within the block (by an example) are forgotten after it."""
+    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS,
+                                                                   CONTROLLERS)]
+    try:
+        yield
+    finally:
+        for registry, plugins in registries:
+            registry._plugins = plugins
 
 
 @pytest.fixture
 def run_example(capsys, monkeypatch):
     """``run(name, *args) -> stdout`` of ``python examples/name args``, in this process;
     the names an example registers are forgotten afterwards."""
-    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS,
-                                                                   CONTROLLERS)]
 
     def run(name: str, *args: str) -> str:
         monkeypatch.setattr(sys, "argv", [str(EXAMPLES / name), *args])
         runpy.run_path(str(EXAMPLES / name), run_name="__main__")
         return capsys.readouterr().out
 
-    yield run
-    for registry, plugins in registries:
-        registry._plugins = plugins
+    with registrations_forgotten():
+        yield run
 
 
 def test_every_example_is_tested():
@@ -90,6 +103,21 @@ def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offse
                        for line in lines.splitlines())
     assert all("success True" in line for line in lines.splitlines()), lines
     assert integral < 1.0 < plain, lines
+
+
+def test_a_compiled_controller_of_ones_own_is_loaded_from_numbas_cache_when_run_again():
+    """Its step, compiled once and cached beside the file, is loaded from numba's cache by
+    the next run (another process, here another namespace) instead of compiled again (a
+    second or so each run): its gains are of types numba finds again."""
+    vehicle = vehicle_arrays(load_params("tello"))
+    steps = []
+    for _ in range(2):
+        with registrations_forgotten():
+            names = runpy.run_path(str(EXAMPLES / "custom_controller.py"), run_name="example")
+        controller = names["se3_integral"](vehicle)
+        controller.step.compile(controller.function_type(vehicle).signature)
+        steps.append(controller.step)
+    assert steps[0] is not steps[1] and steps[1].stats.cache_hits, steps[1].stats
 
 
 @pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")
