@@ -5,6 +5,8 @@ the package, fly (the planner and the controller on a course map)."""
 from __future__ import annotations
 
 import runpy
+import shutil
+import subprocess
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -15,8 +17,6 @@ import pytest
 from quadnav.control.registry import CONTROLLERS
 from quadnav.planning.registry import PLANNERS
 from quadnav.trajectory.generate import METHODS
-from quadnav.vehicle.dynamics import vehicle_arrays
-from quadnav.vehicle.params import load_params
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -105,19 +105,44 @@ def test_a_controller_of_ones_own_flies_a_course_map_and_removes_the_winds_offse
     assert integral < 1.0 < plain, lines
 
 
-def test_a_compiled_controller_of_ones_own_is_loaded_from_numbas_cache_when_run_again():
+#: Loads examples/custom_controller.py's controller in a fresh process, as a plug-in
+#: (``file.py:Name``, as ``--controller`` does) or imported as a module of its own name,
+#: compiles its step and prints how many times numba found it in its cache.
+LOAD_CONTROLLER = """
+import sys
+from quadnav.plugins import load_target
+from quadnav.vehicle.dynamics import vehicle_arrays
+from quadnav.vehicle.params import load_params
+folder, how = sys.argv[1:]
+if how == "plug-in":
+    factory = load_target(folder + "/custom_controller.py:se3_integral", "controller")
+else:
+    sys.path.insert(0, folder)
+    from custom_controller import se3_integral as factory
+vehicle = vehicle_arrays(load_params("tello"))
+controller = factory(vehicle)
+controller.compiled_step(vehicle)
+print(sum(controller.step.stats.cache_hits.values()))
+"""
+
+
+def test_a_compiled_controller_of_ones_own_is_loaded_from_numbas_cache_when_run_again(
+        tmp_path):
     """Its step, compiled once and cached beside the file, is loaded from numba's cache by
-    the next run (another process, here another namespace) instead of compiled again (a
-    second or so each run): its gains are of types numba finds again."""
-    vehicle = vehicle_arrays(load_params("tello"))
-    steps = []
-    for _ in range(2):
-        with registrations_forgotten():
-            names = runpy.run_path(str(EXAMPLES / "custom_controller.py"), run_name="example")
-        controller = names["se3_integral"](vehicle)
-        controller.step.compile(controller.function_type(vehicle).signature)
-        steps.append(controller.step)
-    assert steps[0] is not steps[1] and steps[1].stats.cache_hits, steps[1].stats
+    the next run instead of compiled again (a second or so each run): its gains are of
+    types numba finds again. And a file loaded as a plug-in and then imported by a
+    script of one's own (another module name in numba's cache entry) still flies."""
+    shutil.copy(EXAMPLES / "custom_controller.py", tmp_path)
+
+    def cache_hits(how: str) -> int:
+        done = subprocess.run([sys.executable, "-c", LOAD_CONTROLLER, str(tmp_path), how],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        return int(done.stdout)
+
+    assert cache_hits("plug-in") == 0
+    assert cache_hits("plug-in") == 1
+    assert cache_hits("module") == 0  # the plug-in's entry dropped, compiled again
 
 
 @pytest.mark.filterwarnings("ignore:start .* is inside the 0.3 m safety margin")

@@ -84,3 +84,21 @@ class Controller:
         array = types.float64[::1]
         return types.FunctionType(array(array, array, array, numba.typeof(self.gains),
                                         numba.typeof(vehicle), types.float64))
+
+    def compiled_step(self, vehicle: Any) -> Any:
+        """:attr:`step` compiled for :meth:`function_type` (numba's compile result), loaded
+        from numba's cache on disk when the step is cached there (``@njit(cache=True)``).
+
+        A cache entry names the module its function was compiled in, and loading it
+        imports that module again. One file run as a script (module ``__main__``) and
+        loaded as a plug-in (``file.py:Name``, module ``quadnav_plugin_...``) shares one
+        cache entry but not the module's name, so the entry one of them wrote cannot be
+        loaded in the other's process (numba raises ImportError). Such an entry is
+        dropped and the step compiled again, which writes an entry loadable here.
+        """
+        signature = self.function_type(vehicle).signature
+        try:
+            return self.step.get_compile_result(signature)
+        except ImportError:
+            self.step._cache.flush()  # numba's only handle on a dispatcher's disk cache
+            return self.step.get_compile_result(signature)

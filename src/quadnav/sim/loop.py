@@ -243,6 +243,6 @@ def run_steps(controller: Controller, *args: Any) -> tuple[int, int]:
                 fly_steps.compile(signature)
             finally:
                 fly_steps.disable_compile(True)
-        step = CompileResultWAP(controller.step.get_compile_result(function_type.signature))
+        step = CompileResultWAP(controller.compiled_step(args[6]))
     _loaded[controller] = step
     return fly_steps(step, *args)
