@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import tomllib
 from enum import Enum
 from pathlib import Path
@@ -123,34 +124,21 @@ def as_plain(value: Any) -> Any:
 
 def toml_text(value: Any, comment: str = "") -> str:
     """A config dataclass (or a JSON-ready dict of numbers, strings, lists and nested dicts)
-    as TOML text that :func:`read_toml` and :func:`from_table` read back exactly: scalars
-    and lists first, then one ``[table]`` per nested dict (dotted for deeper ones), after
-    ``comment`` as ``#`` lines."""
-    lines = [f"# {line}".rstrip() for line in comment.splitlines()]
-    _toml_table(as_plain(value), [], lines)
-    return "\n".join(lines).lstrip("\n") + "\n"
+    as TOML text that :func:`read_toml` and :func:`from_table` read back exactly, written
+    by tomli-w (scalars and lists first, then one ``[table]`` per nested dict; a list of
+    numbers on one line), after ``comment`` as ``#`` lines."""
+    import tomli_w
+
+    lines = "".join(f"# {line}".rstrip() + "\n" for line in comment.splitlines())
+    return lines + _NUMBER_LIST.sub(_one_line, tomli_w.dumps(as_plain(value)))
 
 
-def _toml_table(table: dict[str, Any], path: list[str], lines: list[str]) -> None:
-    nested = {key: item for key, item in table.items() if isinstance(item, dict)}
-    if path:
-        lines += ["", f"[{'.'.join(path)}]"]
-    lines += [f"{key} = {_toml_value(item)}" for key, item in table.items()
-              if key not in nested]
-    for key, item in nested.items():
-        _toml_table(item, [*path, key], lines)
+#: A list of numbers as tomli-w writes it, an item per line.
+_NUMBER_LIST = re.compile(r"\[\n((?:[ \t]+[-+0-9.eE]+,\n)+)\]")
 
 
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_toml_value(item) for item in value) + "]"
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ValueError(f"TOML has no {value}")
-    return repr(value)
+def _one_line(match: re.Match) -> str:
+    return "[" + ", ".join(item.strip().rstrip(",") for item in match.group(1).splitlines()) + "]"
 
 
 def require(checks: list[tuple[bool, str]]) -> None:

@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import os
-import re
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -15,7 +14,7 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import PrivateAttr, ValidationError
 
-from quadnav.config import as_plain, read_toml
+from quadnav.config import as_plain, read_toml, toml_text
 from quadnav.control.registry import controller_gains
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_SPEED, SEED
@@ -147,11 +146,7 @@ class MissionConfig(Section):
         """The mission as TOML text (:meth:`table`; lists of numbers on one line), after
         ``comment`` as ``#`` lines; :func:`read_mission` reads it back to the same
         mission."""
-        import tomli_w
-
-        lines = "".join(f"# {line}".rstrip() + "\n" for line in comment.splitlines())
-        text = tomli_w.dumps(self.table())
-        return lines + NUMBER_LIST.sub(_one_line, text)
+        return toml_text(self.table(), comment)
 
     # ---------------------------------------------------------------- building a mission
     def load(self) -> MissionFiles:
@@ -350,13 +345,3 @@ def _validated(table: dict[str, Any], folder: str | Path | None,
         raise source.refusal(error.errors()[0], MissionConfig) from None
     config._source = source
     return config
-
-
-#: A list of numbers as tomli-w writes it, an item per line.
-NUMBER_LIST = re.compile(r"\[\n((?:[ \t]+[-+0-9.eE]+,\n)+)\]")
-
-
-def _one_line(match: re.Match) -> str:
-    return "[" + ", ".join(item.strip().rstrip(",") for item in match.group(1).splitlines()) + "]"
-
-
