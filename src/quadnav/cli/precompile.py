@@ -1,8 +1,8 @@
 """Compile the kernels of the main commands into numba's cache beside the package.
 
 The build runs this (``setup.py``), so that the first ``quadnav fly`` after ``pip install``
-loads the planner, the controllers and the simulation from the cache instead of spending
-about 30 s of CPU compiling them. numba keys its cache on the content of each source file
+loads the planner, the controllers and the simulation from the cache instead of compiling
+them first. numba keys its cache on the content of each source file
 (numba 0.68 and later), the Python version, numba's version and the CPU, so the kernels
 compiled into the wheel while ``pip install`` builds it on this machine are the ones the
 installed package loads. Where a key differs (an older numba, a wheel built on another

@@ -6,8 +6,8 @@ reference table (position, velocity, acceleration, yaw, yaw rate; held at the en
 the settling time); the wind, gusts and sensor noise are drawn up front from
 ``settings.seed``; then the compiled loop (:mod:`quadnav.sim.loop`) runs the whole flight
 in one call, or, when there is a ``progress`` callback, in chunks of :data:`CHUNK_SECONDS`
-of flight, calling it in between (each call of the loop costs about 0.03 ms of argument
-handling, what the loop takes to fly a fiftieth of a second). The loop is first called for
+of flight, calling it in between (each call of the loop costs its argument handling, so
+the chunks are long). The loop is first called for
 no step, which loads it (numba's dispatch: on a process's first flight, a load from numba's
 cache or a compile), so that its one-off cost is timed apart from the flight's
 (:attr:`~quadnav.sim.flight.Flight.load_time`, :attr:`~quadnav.sim.flight.Flight.wall_time`).

@@ -20,10 +20,9 @@ axes in turn and shows that each three cuts halve the edges per cell, so the wor
 ``T(n) = 8 T(n / 4) + O(n)``, that is ``O(n^1.5)`` box visits for ``n`` boxes whatever
 their layout. Here the cut is along the axis with the most faces inside the cell, which
 measured the same or better on every layout tried and much better on forests (full-height
-trunks are then cut, not copied into both halves). Measured on one core: 0.05-0.3 s for
-100,000 random boxes or a forest of 100,000 trunks and branches; 1-9 s for contrived
-layouts such as 100,000 long thin sticks along all three axes. Answers are exact up to
-floating-point rounding.
+trunks are then cut, not copied into both halves); ``bench/free_volume.py`` measures it on
+random boxes, forests and contrived layouts such as long thin sticks along all three axes.
+Answers are exact up to floating-point rounding.
 """
 
 from __future__ import annotations
