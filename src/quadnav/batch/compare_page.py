@@ -19,8 +19,9 @@ from matplotlib.figure import Figure
 
 from quadnav import __version__
 from quadnav.batch.compare import ALPHA, METRIC_NOTES, METRICS
-from quadnav.batch.summary_page import breakable, wrapped
+from quadnav.batch.summary_page import wrapped
 from quadnav.files import atomic_output
+from quadnav.pages import breakable
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
 from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
 
