@@ -11,7 +11,8 @@ from PIL import Image
 
 from quadnav.pages import ENVIRONMENT, breakable, figure, render
 
-PAGES = ("report.html", "tune.html", "grade.html", "summary.html", "viewer.html")
+PAGES = ("report.html", "tune.html", "grade.html", "summary.html", "compare.html",
+         "viewer.html")
 
 
 def test_every_page_template_is_found_and_compiles():

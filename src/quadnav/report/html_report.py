@@ -11,10 +11,7 @@ them, else drawn from the folder read back, by the same functions.
 
 from __future__ import annotations
 
-import base64
-import html
 import io
-import struct
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -53,32 +50,6 @@ CAPTIONS = {
                   "the true track (the emulator's) against time, with the 1-sigma "
                   "uncertainty stated for the landing (dashed).",
 }
-STYLE = """
-body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
-       color: #222; margin: 0; background: #fff; line-height: 1.45; }
-main { max-width: 1120px; margin: 0 auto; padding: 1.5em; }
-h1 { font-size: 1.6em; margin-bottom: 0.2em; }
-h2 { font-size: 1.3em; border-bottom: 2px solid #ccc; padding-bottom: 0.2em;
-     margin-top: 2.2em; overflow-wrap: anywhere; }
-h3 { font-size: 1.05em; margin-top: 1.6em; }
-.outcome { font-weight: 600; }
-.success { color: #1a7f37; }
-.failure { color: #c62828; }
-figure { margin: 1em 0; }
-figure img { max-width: 100%; height: auto; border: 1px solid #e4e4e4; }
-.tooltips { position: relative; width: fit-content; max-width: 100%; }
-.tooltips img { display: block; }
-.tooltips .tooltip { position: absolute; }
-figcaption { font-size: 0.9em; color: #555; }
-table { border-collapse: collapse; font-size: 0.9em; margin: 0.5em 0; }
-th, td { border: 1px solid #ddd; padding: 0.25em 0.6em; text-align: left;
-         vertical-align: top; }
-th { background: #f3f3f3; }
-td.value { font-family: ui-monospace, Menlo, Consolas, monospace; overflow-wrap: anywhere; }
-code { font-family: ui-monospace, Menlo, Consolas, monospace; font-size: 0.95em; }
-.muted { color: #666; font-size: 0.9em; overflow-wrap: anywhere; }
-@media print { section + section { break-before: page; } main { max-width: none; } }
-"""
 
 
 def check_report_path(path: str | Path) -> Path:
@@ -121,16 +92,6 @@ def unit_of(key: str) -> str:
     return next((unit for ending, unit in UNITS if key.endswith(ending)), "")
 
 
-def html_table(header: Sequence[str], rows: Sequence[Sequence[str]], value_column: int) -> str:
-    """An HTML table of already escaped cells; the ``value_column`` is set monospace."""
-    head = "".join(f"<th>{cell}</th>" for cell in header)
-    body = "".join(
-        "<tr>" + "".join(f'<td class="value">{cell}</td>' if column == value_column
-                         else f"<td>{cell}</td>" for column, cell in enumerate(row)) + "</tr>"
-        for row in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
 def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
     """The figure ``name`` of ``run``: the folder's PNG file, or drawn by ``make``."""
     path = run.folder / name
@@ -147,33 +108,6 @@ def png_bytes(fig: Figure) -> bytes:
     finally:
         plt.close(fig)
     return buffer.getvalue()
-
-
-def figure_html(png: bytes, caption: str,
-                tooltips: Sequence[tuple[tuple[float, float, float, float], str]] = ()) -> str:
-    """A ``<figure>`` with the PNG embedded (base64) and its caption; each of ``tooltips``,
-    ``((left, top, width, height), text)`` with the box in fractions of the image from its
-    top left corner, shows ``text`` when the pointer rests on that part of the image (a
-    shortened label's full wording), at any size the image is shown."""
-    width, height = struct.unpack(">II", png[16:24])  # from the PNG's IHDR chunk
-    data = base64.b64encode(png).decode("ascii")
-    image = (f'<img src="data:image/png;base64,{data}" width="{width}" '
-             f'height="{height}" alt="{html.escape(caption)}">')
-    if tooltips:
-        spots = "".join(
-            f'<span class="tooltip" title="{html.escape(text)}" style="left: {100 * left:.3f}%; '
-            f'top: {100 * top:.3f}%; width: {100 * wide:.3f}%; height: {100 * high:.3f}%">'
-            "</span>" for (left, top, wide, high), text in tooltips)
-        image = f'<div class="tooltips">{image}{spots}</div>'
-    return f"<figure>{image}<figcaption>{html.escape(caption)}</figcaption></figure>"
-
-
-def html_page(title: str, body: str) -> str:
-    """A whole HTML document: ``title`` (text) and ``body`` (HTML) in the report's style."""
-    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-            f'<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
-            f"<body><main>{body}</main></body></html>\n")
 
 
 def _summary(run: Run) -> str:
