@@ -22,8 +22,8 @@ from PIL import Image
 
 from quadnav.batch.compare import compare, holm, mcnemar, signed_rank
 from quadnav.batch.compare_page import leaderboard_figure
-from quadnav.batch.summary_page import breakable
 from quadnav.batch.table import read_rows
+from quadnav.pages import breakable
 
 #: One worker for the module, so that its module-scoped fixtures are built once under
 #: --dist loadgroup (each test apart would build them on each worker).

@@ -215,7 +215,7 @@ def test_the_page_shows_the_score_the_rule_and_each_failure_with_its_flight(faul
     root = faulty[0]
     page = (root / "out" / "grade.html").read_text()
     assert "<b>0 of 2</b> missions passed" in page
-    assert "with no contact with a block or the floor and the vehicle&#x27;s body inside" in page
+    assert "with no contact with a block or the floor and the vehicle&#39;s body inside" in page
     assert page.count('<td class="fail">') == 4  # the map x seed table and the list
     assert page.count('<td class="pass">pass</td>') == 2  # the baseline, beside them
     assert "passes through block 0" in page and "in thrust_over" in page

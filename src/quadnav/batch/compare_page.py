@@ -9,7 +9,6 @@ comparison of two contenders, its tests and whether the difference is significan
 
 from __future__ import annotations
 
-import html
 import math
 from pathlib import Path
 from typing import Any
@@ -19,9 +18,10 @@ from matplotlib.figure import Figure
 
 from quadnav import __version__
 from quadnav.batch.compare import ALPHA, METRIC_NOTES, METRICS
-from quadnav.batch.summary_page import breakable, wrapped
+from quadnav.batch.summary_page import wrapped
 from quadnav.files import atomic_output
-from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
+from quadnav.pages import figure, render
+from quadnav.report.html_report import png_bytes
 from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
 
 COMPARE_HTML, COMPARE_PNG = "compare.html", "compare.png"
@@ -125,35 +125,19 @@ def comparison_text(comparison: dict[str, Any]) -> str:
 def compare_html(result: dict[str, Any], folder: Path, png: bytes) -> str:
     """The page of the leaderboard ``result`` of the batch in ``folder``, with its figure
     ``png``."""
-    tests = len(result["comparisons"])
     header, rows = leaderboard_rows(result)
-    significant = [c for c in result["comparisons"] if c["significant"]]
-    body = [
-        "<h1>quadnav compare</h1>",
-        f"<p class=\"muted\">batch {html.escape(str(folder))}; written by quadnav "
-        f"{__version__}.</p>",
-        f"<p>Contenders by <b>{html.escape(', '.join(result['by']))}</b>, over "
-        f"{result['missions']} missions. Missions are paired when they differ only in the "
-        "contender (the same map, query, seed, speed and other grid values). Success rates "
-        "with Wilson 95 % score intervals; other measures: median [quartiles] over the "
-        f"missions that have one ({html.escape(METRIC_NOTES)}). Differences: McNemar's exact "
-        "test on the paired successes, Wilcoxon's signed-rank test on the paired measures, "
-        f"Holm's correction over all {tests} tests; significant when the corrected p-value "
-        f"is below alpha = {ALPHA:g}.</p>",
-        "<h2>Leaderboard</h2>",
-        figure_html(png, "Per contender, best at the top: the success rate with its 95 % "
-                         "interval, and the median of each measure with its quartiles."),
-        html_table([html.escape(h) for h in header],
-                   [[breakable(cell) for cell in row] for row in rows], 2),
-        f"<h2>Significant differences ({len(significant)} of {tests})</h2>",
-        html_table(["contenders", "what differs", "p", "p (Holm)", "significant"],
-                   [[breakable(f"{c['a']} vs {c['b']}"), breakable(comparison_text(c)),
-                     f"{c['p']:.3g}", f"{c['p_holm']:.3g}",
-                     "yes" if c["significant"] else "no"]
-                    for c in sorted(result["comparisons"],
-                                    key=lambda c: (not c["significant"], c["p_holm"]))], 3),
-    ]
-    return html_page("quadnav compare", "".join(body))
+    comparisons = sorted(result["comparisons"], key=lambda c: (not c["significant"], c["p_holm"]))
+    return render(
+        "compare.html", title="quadnav compare", folder=str(folder), version=__version__,
+        result=result, metric_notes=METRIC_NOTES, alpha=ALPHA,
+        leaderboard=figure(png, "Per contender, best at the top: the success rate with its "
+                                "95 % interval, and the median of each measure with its "
+                                "quartiles."),
+        header=header, rows=rows,
+        significant=sum(c["significant"] for c in comparisons),
+        comparisons=[(f"{c['a']} vs {c['b']}", comparison_text(c), f"{c['p']:.3g}",
+                      f"{c['p_holm']:.3g}", "yes" if c["significant"] else "no")
+                     for c in comparisons])
 
 
 def write_compare_page(result: dict[str, Any], folder: Path) -> list[str]:

@@ -10,13 +10,12 @@
 
 The figures name each map by a short label (the end of its path that tells it apart, cut in
 the middle when long); resting the pointer on a label shows the map's full name, which the
-table gives too. Images are embedded PNGs and the style inline (the report's,
-:mod:`quadnav.report.html_report`).
+table gives too. Images are embedded PNGs and the style inline (the report's: the page
+extends :mod:`quadnav.pages`' ``base.html``, in ``templates/summary.html``).
 """
 
 from __future__ import annotations
 
-import html
 import inspect
 import math
 import re
@@ -34,7 +33,8 @@ from quadnav import __version__
 from quadnav.batch.compare import short_spec
 from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
 from quadnav.files import atomic_output
-from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
+from quadnav.pages import figure, render
+from quadnav.report.html_report import png_bytes
 from quadnav.viz.flight_figures import SMALL_FONT, TITLE_FONT
 from quadnav.world.builtin import is_builtin_spec
 from quadnav.world.courses import is_course_name
@@ -287,11 +287,13 @@ def tooltip_boxes(fig: Figure, texts: dict[Text, str]
     return boxes
 
 
-def _figure_with_tooltips(drawn: tuple[Figure, dict[Text, str]], caption: str) -> str:
-    """The page's ``<figure>`` of a figure and its labels' full wording (on hover)."""
+def _figure_with_tooltips(drawn: tuple[Figure, dict[Text, str]], caption: str
+                          ) -> dict[str, Any]:
+    """The page's figure (:func:`quadnav.pages.figure`) of a figure and its labels' full
+    wording (on hover)."""
     fig, texts = drawn
     tooltips = tooltip_boxes(fig, texts)
-    return figure_html(png_bytes(fig), caption, tooltips)
+    return figure(png_bytes(fig), caption, tooltips)
 
 
 def _cell(value: Any) -> str:
@@ -299,65 +301,40 @@ def _cell(value: Any) -> str:
         return "—"
     if isinstance(value, float):
         return f"{value:.3g}"
-    return html.escape(str(value))
+    return str(value)
 
 
-def breakable(text: str) -> str:
-    """``text`` as HTML that may wrap after each ``/``, ``_``, ``:`` and ``(``, so a long
-    path, plug-in spec or column name fits a narrow column."""
-    return re.sub(r"([/_:(])", r"\1<wbr>", html.escape(text))
-
-
-def groups_table(labels: _Groups) -> str:
-    """The groups as an HTML table: what tells them apart, n, successes, the rate and its
+def groups_table(labels: _Groups) -> list[tuple[str, ...]]:
+    """The rows of the groups' table: what tells them apart, n, successes, the rate and its
     interval (percent), refused missions, flights short of the margin and the medians."""
-    header = ("group", "n", "successes", "success rate (%)", "95 % interval (%)", "refused",
-              breakable("kept less margin"),
-              *(breakable(f"median {name}") for name in MEDIAN_COLUMNS))
-    rows = [(breakable(labels.label(g, full=True)), str(g["n"]), str(g["successes"]),
-             _percent(g["success_rate"]),
-             f"{_percent(g['ci_low'])}&ndash;{_percent(g['ci_high'])}", str(g["errors"]),
-             str(g["short_of_margin"]),
+    return [(labels.label(g, full=True), str(g["n"]), str(g["successes"]),
+             _percent(g["success_rate"]), f"{_percent(g['ci_low'])}\u2013{_percent(g['ci_high'])}",
+             str(g["errors"]), str(g["short_of_margin"]),
              *(_cell(g[f"median_{name}"]) for name in MEDIAN_COLUMNS))
             for g in labels.groups]
-    return html_table(header, rows, -1)
 
 
 def summary_html(summary: dict[str, Any], rows: Sequence[dict[str, Any]], folder: Path) -> str:
     """The page over ``summary`` (:func:`~quadnav.batch.summary.summary`) and the ``rows``
     it summarises, naming ``folder`` as the batch's."""
     labels = _Groups(summary["groups"])
-    state = ("" if summary["complete"] else
-             f" (stopped: {summary['finished']} of {summary['missions']} missions finished; "
-             "running the batch again finishes it)")
-    overall = (f"<p><b>{summary['successes']} of {summary['finished']}</b> missions reached "
-               "the goal with no contact, the body inside the map: "
-               f"{_percent(summary['success_rate'])} % (95 % "
-               f"interval {_percent(summary['ci_low'])}&ndash;{_percent(summary['ci_high'])} %)"
-               f"{html.escape(state)}; {summary['errors']} refused (bad query or settings); "
-               f"{summary['short_of_margin']} kept less margin than asked off the legs (by "
-               "any amount).</p>")
-    body = [f"<h1>quadnav batch summary</h1><p class=\"muted\">folder "
-            f"{html.escape(str(folder))}; written by quadnav {__version__}. A success is a "
-            "mission that reached the goal within the tolerance with no contact and its body "
-            "inside the map; a refused "
-            "mission counts as a failure. Intervals are Wilson 95 % score intervals.</p>",
-            overall]
+    figures = {}
     if labels.groups:
-        body += ["<h2>Success rate</h2>",
-                 _figure_with_tooltips(heat_map(labels),
-                                       "Share of missions that reached the goal, per map and "
-                                       "speed, in percent, with its 95 % interval in "
-                                       "brackets. A map's full name shows on its label."),
-                 "<h2>Distributions</h2>",
-                 _figure_with_tooltips(distributions(labels, rows),
-                                       "Per group, over its flown missions: the RMS tracking "
-                                       "error, the least clearance of the vehicle's centre "
-                                       "from a block, and the trajectory's duration (box: "
-                                       "quartiles; whiskers: 1.5 times the box; dots: "
-                                       "beyond)."),
-                 "<h2>Groups</h2>", groups_table(labels)]
-    return html_page("quadnav batch summary", "".join(body))
+        figures = {
+            "heat_map": _figure_with_tooltips(
+                heat_map(labels), "Share of missions that reached the goal, per map and "
+                "speed, in percent, with its 95 % interval in brackets. A map's full name "
+                "shows on its label."),
+            "distributions": _figure_with_tooltips(
+                distributions(labels, rows), "Per group, over its flown missions: the RMS "
+                "tracking error, the least clearance of the vehicle's centre from a block, "
+                "and the trajectory's duration (box: quartiles; whiskers: 1.5 times the box; "
+                "dots: beyond).")}
+    return render("summary.html", title="quadnav batch summary", folder=str(folder),
+                  version=__version__, summary=summary, rate=_percent(summary["success_rate"]),
+                  ci_low=_percent(summary["ci_low"]), ci_high=_percent(summary["ci_high"]),
+                  groups=groups_table(labels),
+                  medians=[f"median {name}" for name in MEDIAN_COLUMNS], **figures)
 
 
 def write_summary_page(summary: dict[str, Any], rows: Sequence[dict[str, Any]],

@@ -14,7 +14,6 @@ study's own storage (``study.db``) is left as it is.
 
 from __future__ import annotations
 
-import html
 import json
 from pathlib import Path
 from typing import Any
@@ -24,7 +23,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from quadnav.config import toml_text
-from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
+from quadnav.pages import figure, render
+from quadnav.report.html_report import png_bytes
 from quadnav.runfolder import replaced_folder
 from quadnav.trajectory.export import csv_table
 from quadnav.tune.evaluate import (
@@ -125,37 +125,28 @@ def _errors_figure(outcome: Outcome, items: list[str]) -> Figure:
 
 
 def _page(tuning: TuneRun, outcome: Outcome, record: dict[str, Any]) -> str:
-    study = tuning.settings.study
-    tuned = outcome.tuned
-    values = [[f"<code>{html.escape(name)}</code>", f"{tuning_start:.4g}", f"{value:.4g}"]
-              for name, value in outcome.best_params.items()
-              for tuning_start in [_start_value(tuning, name)]]
-    body = (
-        f"<h1>Gains tuned for the {html.escape(record['vehicle'])} vehicle</h1>"
-        f"<p>{len(outcome.trials)} trials of an Optuna study ({html.escape(study.sampler)}, "
-        f"seed {study.seed}, {study.parallel} at a time) over the "
-        f"<code>{html.escape(tuning.settings.space)}</code> space "
-        f"({len(record['knobs'])} knobs), on the training set "
-        f"<code>{html.escape(record['training'])}</code>; best: trial {outcome.best_trial}, "
-        f"objective {outcome.best_value:.3f}. Wall time {outcome.wall_time:.0f} s. The "
-        "objective is the mean over the flights of ln(RMS error / 1 cm), plus "
-        f"{OVERSHOOT_WEIGHT:g} per percent of step overshoot beyond {OVERSHOOT_ALLOWED:g} %, "
-        f"{SATURATION_WEIGHT:g} times the share of saturated control steps and "
-        f"{FAILURE_PENALTY:g} for a failed flight.</p>"
-        f"<h2>Held-out set: <code>{html.escape(record['held_out'])}</code></h2>"
-        + html_table(COMPARISON_HEADER, comparison_rows(outcome, "held-out"), 1)
-        + figure_html(png_bytes(_errors_figure(outcome, outcome.items["held-out"])),
-                      "RMS tracking error of each held-out flight with each gain set.")
-        + f"<h2>Training set: <code>{html.escape(record['training'])}</code></h2>"
-        + html_table(COMPARISON_HEADER, comparison_rows(outcome, "training"), 1)
-        + figure_html(png_bytes(_history_figure(outcome)),
-                      "The objective of each trial on the training set, and the best so far.")
-        + "<h2>Tuned values</h2>"
-        + html_table(("knob", f"starting ({OWN})", TUNED), values, 1)
-        + f"<p>The whole gain set is in <code>gains.toml</code>: fly it with "
-        f"<code>--gains gains.toml</code>. Tuned attitude gains: "
-        f"{html.escape(str(tuned.attitude_kp.tolist()))}.</p>")
-    return html_page(f"quadnav tune: {record['vehicle']}", body)
+    """report.html: the gain sets compared on both sets, the study's progress, the tuned
+    values against the starting ones."""
+    return render(
+        "tune.html", title=f"quadnav tune: {record['vehicle']}", vehicle=record["vehicle"],
+        trials=len(outcome.trials), study=tuning.settings.study, space=tuning.settings.space,
+        knobs=len(record["knobs"]), training=record["training"], held_out=record["held_out"],
+        best_trial=outcome.best_trial, best_value=outcome.best_value,
+        wall_time=outcome.wall_time,
+        weights={"overshoot": OVERSHOOT_WEIGHT, "overshoot_allowed": OVERSHOOT_ALLOWED,
+                 "saturation": SATURATION_WEIGHT, "failure": FAILURE_PENALTY},
+        comparison_header=COMPARISON_HEADER,
+        held_out_rows=comparison_rows(outcome, "held-out"),
+        training_rows=comparison_rows(outcome, "training"),
+        errors_figure=figure(png_bytes(_errors_figure(outcome, outcome.items["held-out"])),
+                             "RMS tracking error of each held-out flight with each gain set."),
+        history_figure=figure(png_bytes(_history_figure(outcome)),
+                              "The objective of each trial on the training set, and the best "
+                              "so far."),
+        own=OWN, tuned=TUNED,
+        values=[(name, f"{_start_value(tuning, name):.4g}", f"{value:.4g}")
+                for name, value in outcome.best_params.items()],
+        attitude_kp=str(outcome.tuned.attitude_kp.tolist()))
 
 
 def _start_value(tuning: TuneRun, name: str) -> float:

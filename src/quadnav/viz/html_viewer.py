@@ -10,20 +10,21 @@ draws with three.js (WebGL, a depth buffer, so near things hide far ones) and it
 controls: rotate by dragging, pan with shift or the right button, zoom with the wheel. No
 network is needed: three.js (vendored from the npm registry's ``three`` 0.147.0, MIT, in
 ``viewer/three/`` with its licence), the viewer (``viewer/viewer.js``) and the run's
-numbers (JSON) are written into the page.
+numbers (JSON) are written into the page (the template ``viewer.html`` of
+:mod:`quadnav.pages`).
 """
 
 from __future__ import annotations
 
-import html
 import json
-import re
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
+from markupsafe import Markup
 
 from quadnav.files import atomic_output
+from quadnav.pages import render
 from quadnav.runs import Run, run_outcome
 from quadnav.viz.thinning import evenly_spread
 
@@ -35,8 +36,6 @@ DECIMALS = 3
 #: Decimals kept of the attitude quaternions.
 QUATERNION_DECIMALS = 4
 _ASSETS = resources.files("quadnav.viz") / "viewer"
-#: The places in template.html that the page fills in.
-_TOKEN = re.compile(r"\{\{(TITLE|THREE_JS|VIEWER_JS|RUN_DATA)\}\}")
 #: The vendored three.js scripts, in the order they define ``THREE`` and its add-ons.
 THREE_SCRIPTS = ("three.min.js", "OrbitControls.js", "LineSegmentsGeometry.js",
                  "LineGeometry.js", "LineMaterial.js", "LineSegments2.js", "Line2.js")
@@ -107,23 +106,24 @@ def viewer_data(run: Run) -> dict:
     return data
 
 
-def _script_json(value: dict) -> str:
+def _script_json(value: dict) -> Markup:
     """``value`` as JSON that is safe inside a ``<script>`` element (no ``<`` at all, so no
-    ``</script>`` can end it early)."""
-    return json.dumps(value, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
+    ``</script>`` can end it early), written into the page as it is."""
+    return Markup(json.dumps(value, separators=(",", ":"), allow_nan=False)
+                  .replace("<", "\\u003c"))
 
 
 def viewer_html(run: Run) -> str:
-    """The self-contained page of ``run``: the template with the renderer and the run's
-    data written in (no external references)."""
+    """The self-contained page of ``run``: the template with the renderer (the vendored
+    scripts, trusted as they are) and the run's data written in (no external
+    references)."""
     data = viewer_data(run)
-    parts = {"TITLE": html.escape(f"quadnav: {data['title']}"),
-             "THREE_JS": "\n;\n".join((_ASSETS / "three" / name).read_text(encoding="utf-8")
-                                      for name in THREE_SCRIPTS),
-             "VIEWER_JS": (_ASSETS / "viewer.js").read_text(encoding="utf-8"),
-             "RUN_DATA": _script_json(data)}
-    template = (_ASSETS / "template.html").read_text(encoding="utf-8")
-    return _TOKEN.sub(lambda match: parts[match[1]], template)
+    three_js = "\n;\n".join((_ASSETS / "three" / name).read_text(encoding="utf-8")
+                            for name in THREE_SCRIPTS)
+    return render("viewer.html", title=f"quadnav: {data['title']}",
+                  three_js=Markup(three_js),
+                  viewer_js=Markup((_ASSETS / "viewer.js").read_text(encoding="utf-8")),
+                  run_data=_script_json(data))
 
 
 def write_viewer(run: Run, path: str | Path) -> Path:
