@@ -56,6 +56,18 @@ def alone(spec_path) -> list[dict]:
     return _alone(spec_path)
 
 
+@pytest.fixture(scope="module")
+def kept_plans(spec_path, tmp_path_factory) -> Path:
+    """A folder of the spec's plans, as its missions flown with a cache left it."""
+    spec = read_spec(spec_path)
+    context = load_context(spec)
+    folder = tmp_path_factory.mktemp("kept") / PLANS
+    cache = StageCache(folder)
+    for mission in spec.missions():
+        flown_row(context, mission, cache)
+    return folder
+
+
 def test_a_seeds_table_flies_every_planner_seed_with_every_simulation_seed(tmp_path):
     spec = parse_spec(tomllib.loads(SPEC.replace("sim = 3", "sim = [5, 7, 9]")), tmp_path)
 
@@ -130,13 +142,11 @@ def _straight_through(plan_file: Path, problem) -> None:
 @pytest.mark.parametrize("fault", ["garbage", "truncated", "another plan", "pickled",
                                    "through a wall"])
 def test_a_plan_file_that_is_not_a_sound_plan_of_its_key_is_made_again(
-        spec_path, alone, tmp_path, fault):
+        spec_path, alone, kept_plans, tmp_path, fault):
     spec = read_spec(spec_path)
     context = load_context(spec)
     folder = tmp_path / PLANS
-    first = StageCache(folder)
-    for mission in spec.missions():
-        flown_row(context, mission, first)
+    shutil.copytree(kept_plans, folder)
     target, other = sorted(folder.iterdir(), key=lambda p: p.stem != alone[0]["plan_key"])
     mission = spec.missions()[0]
     problem = mission_problem(context, mission, mission_settings(context, mission).body)
@@ -175,7 +185,7 @@ def test_a_batch_keeps_its_plans_and_a_resumed_batch_plans_none_again(spec_path,
     lines = (out / "results.csv").read_text().splitlines(keepends=True)
     (out / "results.csv").write_text("".join(lines[:3]))
 
-    again = run_here("batch", spec_path, "--workers", "2", "--quiet", "-o", out)
+    again = run_here("batch", spec_path, "--workers", "1", "--quiet", "-o", out)
 
     assert again.returncode == 0, again.stderr
     assert f"6 missions, 2 already in {out}; flying 4 on" in again.stdout
@@ -185,6 +195,13 @@ def test_a_batch_keeps_its_plans_and_a_resumed_batch_plans_none_again(spec_path,
         assert (path.stat().st_ino, path.stat().st_mtime_ns) == (stat.st_ino,
                                                                   stat.st_mtime_ns)
     assert sorted((out / PLANS).iterdir()) == sorted(plans)
+    # a row flies again alone, its simulation seed in its mission file
+    refly = run_here("refly", out, "6", "-o", tmp_path / "row6", "--no-figures")
+    assert refly.returncode == 0, refly.stderr
+    metrics = json.loads((tmp_path / "row6" / "metrics.json").read_text())
+    assert metrics["rms_tracking_error_m"] == alone[5]["rms_tracking_error_m"]
+    mission = tomllib.loads((tmp_path / "row6" / "mission.toml").read_text())
+    assert (mission["seed"], mission["simulation"]["seed"]) == (1, 2)
 
 
 def test_a_batch_folder_written_before_the_simulation_seeds_resumes(tmp_path):
