@@ -170,6 +170,18 @@ def test_a_plan_file_that_is_not_a_sound_plan_of_its_key_is_made_again(
                                    mission_settings(context, mission))[0] == target.stem
 
 
+def test_a_plan_that_cannot_be_kept_on_disk_is_kept_in_memory(spec_path, alone, tmp_path):
+    spec = read_spec(spec_path)
+    context = load_context(spec)
+    (tmp_path / PLANS).write_text("a file where the folder would be")
+    cache = StageCache(tmp_path / PLANS)
+
+    rows = [flown_row(context, mission, cache) for mission in spec.missions()]
+
+    assert all(same_row(a, b) for a, b in zip(rows, alone, strict=True))
+    assert cache.made["plan"] == 2 and (tmp_path / PLANS).is_file()
+
+
 def test_a_batch_keeps_its_plans_and_a_resumed_batch_plans_none_again(spec_path, alone,
                                                                       tmp_path):
     out = tmp_path / "out"

@@ -42,7 +42,7 @@ import numpy as np
 
 from quadnav import __version__
 from quadnav.config import as_plain
-from quadnav.errors import QuadnavError
+from quadnav.errors import QuadnavError, WriteError
 from quadnav.files import atomic_output
 from quadnav.mission import (
     Mission,
@@ -214,7 +214,9 @@ class StageCache:
         return None if self.folder is None else self.folder / f"{key}.npz"
 
     def _write(self, key: str, planned: Mission) -> None:
-        """Keep a solved plan in the folder as ``KEY.npz``, atomically."""
+        """Keep a solved plan in the folder as ``KEY.npz``, atomically; where it cannot be
+        written (no room, the folder's place taken by a file), in memory alone: a mission
+        never fails for its cache."""
         path = self._path(key)
         if path is None or not planned.plan.solved:  # no path found: searched again
             return
@@ -228,10 +230,13 @@ class StageCache:
                           "stopped_by": stats.stopped_by,
                           "setup_seconds": stats.setup_seconds,
                           "post": [dataclasses.astuple(step) for step in stats.post]}}
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_output(path) as tmp, tmp.open("wb") as file:
-            np.savez(file, path=result.path, cost_history=stats.cost_history,
-                     info=np.array(json.dumps(info)))
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_output(path) as tmp, tmp.open("wb") as file:
+                np.savez(file, path=result.path, cost_history=stats.cost_history,
+                         info=np.array(json.dumps(info)))
+        except (OSError, WriteError):  # no room, no folder: the plan is kept in memory
+            return
 
     def _read(self, key: str, problem: PlanningProblem, settings: MissionSettings
               ) -> Mission | None:
