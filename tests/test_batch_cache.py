@@ -15,12 +15,19 @@ import numpy as np
 import pytest
 from clitools import assert_user_error, run_here
 
-from quadnav.batch.fly_one import flown_row, load_context, mission_problem, mission_settings
+from quadnav.batch.fly_one import (
+    flown_row,
+    fly_mission_spec,
+    load_context,
+    mission_problem,
+    mission_settings,
+)
 from quadnav.batch.folder import PLANS
 from quadnav.batch.grid import parse_spec, read_spec
 from quadnav.batch.stages import StageCache
 from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
 from quadnav.control.registry import controller_gains
+from quadnav.trajectory.space import reference_margins, trajectory_margins
 from quadnav.tune.sets import read_set, set_items
 from quadnav.vehicle.params import load_params
 from quadnav.world import load_world
@@ -267,3 +274,18 @@ def test_a_world_inflates_and_labels_its_free_space_once_per_margin():
     assert "_inflated" not in pickle.loads(pickle.dumps(world)).__dict__
     assert np.array_equal(unblocked_components(fresh, 1000)[0], labels)
     assert not disconnected(inflated, world.start, world.goal, 1000)
+
+
+def test_missions_that_fly_one_trajectory_measure_its_margins_once(spec_path):
+    spec = read_spec(spec_path)
+    context = load_context(spec)
+    cache = StageCache()
+    first, second = (fly_mission_spec(context, m, cache) for m in spec.missions()[:2])
+    world = context.worlds[WINDOW]
+
+    assert second.trajectory is first.trajectory
+    assert reference_margins(first.trajectory, world) is reference_margins(
+        second.trajectory, world)
+    assert reference_margins(first.trajectory, world) == trajectory_margins(first.trajectory,
+                                                                            world)
+    assert first.metrics()["trajectory_margin_m"] == second.metrics()["trajectory_margin_m"]
