@@ -22,7 +22,7 @@ from quadnav.batch.fly_one import (
     mission_problem,
     mission_settings,
 )
-from quadnav.batch.folder import PLANS
+from quadnav.batch.folder import PLANS, batch_record, begin
 from quadnav.batch.grid import parse_spec, read_spec
 from quadnav.batch.stages import StageCache
 from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
@@ -221,6 +221,20 @@ def test_a_batch_keeps_its_plans_and_a_resumed_batch_plans_none_again(spec_path,
     assert metrics["rms_tracking_error_m"] == alone[5]["rms_tracking_error_m"]
     mission = tomllib.loads((tmp_path / "row6" / "mission.toml").read_text())
     assert (mission["seed"], mission["simulation"]["seed"]) == (1, 2)
+
+
+def test_a_restarted_batch_forgets_the_plans_of_the_batch_it_replaces(spec_path, tmp_path):
+    spec = read_spec(spec_path)
+    record = batch_record(spec, load_context(spec))
+    (tmp_path / PLANS).mkdir()
+    (tmp_path / PLANS / "0123.npz").write_bytes(b"a plan of another batch")
+
+    begin(tmp_path, record, restart=False, rows=[])
+    assert (tmp_path / PLANS / "0123.npz").is_file()
+    begin(tmp_path, record, restart=True, rows=[])
+
+    assert not (tmp_path / PLANS).exists()
+    assert json.loads((tmp_path / "batch.json").read_text()) == record
 
 
 def test_a_batch_folder_written_before_the_simulation_seeds_resumes(tmp_path):
