@@ -4,6 +4,12 @@ flying the same missions, in missions per CPU-second.
 Run: ``python bench/batch.py [--missions 20] [--repeats 3] [--workers 2] [--improve N]``,
 or ``--quick`` for a smoke run (4 missions, one repeat).
 
+``--shared-plans`` runs instead the issue's case (a): 20 planner seeds x 10 simulation seeds
+(``seeds = {plan = 20, sim = 10}``) with gusts of 0.02 N on the course map rbe595/map1 (from
+``../shared/maps``, with the course's start and goal) at 2 m/s and 3 m/s^2, 200 missions whose
+plans and trajectories are each made once, and prints per repeat the CPU seconds per
+mission, the wall time, the success rate and the plans made.
+
 The missions: the built-in worlds ``forest`` and ``window`` alternately, each with its own
 start and goal, seeds 0, 1, 2, ... (half the missions each), at 2 m/s with 3 m/s^2 and
 ``fly``'s search budget (50,000 samples of improvement after the first path; ``--improve``
@@ -39,6 +45,7 @@ from pathlib import Path
 
 from planning import table
 
+from quadnav.batch.folder import PLANS
 from quadnav.batch.table import RESULTS_CSV, WALL_TIME_COLUMNS, read_rows
 from quadnav.mission import DEFAULT_IMPROVE
 
@@ -49,6 +56,10 @@ SPEED = 2.0
 ACCELERATION = 3.0
 TIME_CAP = 60.0
 TARGET = 5.0
+#: Case (a) of issue 29: a course map, its start and goal, and the seeds and gusts.
+SHARED_MAP = Path(__file__).resolve().parents[2] / "shared" / "maps" / "rbe595" / "map1.txt"
+SHARED_QUERY = {"start": [0.1, -4.9, 0.2], "goal": [8.0, 18.0, 3.0]}
+PLAN_SEEDS, SIM_SEEDS, GUSTS = 20, 10, 0.02
 
 
 @dataclass(frozen=True)
@@ -106,11 +117,12 @@ def same_results(batch_folder: Path, fly_folder: Path, count: int) -> bool:
     return True
 
 
-def study_arguments(description: str) -> tuple[argparse.Namespace, int, int]:
+def study_arguments(description: str, parser: argparse.ArgumentParser | None = None
+                    ) -> tuple[argparse.Namespace, int, int]:
     """The flags of a batch bench (``--missions``, ``--repeats``, ``--workers``,
-    ``--improve``, ``--quick``), and the missions (a multiple of the maps) and repeats
-    they ask for."""
-    parser = argparse.ArgumentParser(description=description)
+    ``--improve``, ``--quick``, on ``parser`` when given, which may hold others), and the
+    missions (a multiple of the maps) and repeats they ask for."""
+    parser = parser or argparse.ArgumentParser(description=description)
     parser.add_argument("--missions", type=int, default=None, help="missions (20; quick 4)")
     parser.add_argument("--repeats", type=int, default=None, help="repeats (3; quick 1)")
     parser.add_argument("--workers", type=int, default=2, help="local workers (2)")
@@ -122,8 +134,41 @@ def study_arguments(description: str) -> tuple[argparse.Namespace, int, int]:
     return args, count - count % len(MAPS), args.repeats or (1 if args.quick else 3)
 
 
+def shared_plans(workers: int, improve: int, repeats: int) -> None:
+    """Case (a): 200 missions sharing 20 plans (see the module docstring), timed."""
+    spec_text = (f"seeds = {{plan = {PLAN_SEEDS}, sim = {SIM_SEEDS}}}\nspeeds = [{SPEED}]\n"
+                 f"gusts = [{GUSTS}]\naccel = {ACCELERATION}\ntime_cap = {TIME_CAP}\n"
+                 f"improve = {improve}\nmaps = [{{map = {json.dumps(str(SHARED_MAP))}, "
+                 f"start = {SHARED_QUERY['start']}, goal = {SHARED_QUERY['goal']}}}]\n")
+    count = PLAN_SEEDS * SIM_SEEDS
+    lines = []
+    with tempfile.TemporaryDirectory() as scratch:
+        spec = Path(scratch) / "spec.toml"
+        spec.write_text(spec_text)
+        for k in range(repeats):
+            out = Path(scratch) / f"batch-{k}"
+            run = timed([QUADNAV, "batch", str(spec), "--workers", str(workers), "--quiet",
+                         "-o", str(out)])
+            rows = read_rows(out / RESULTS_CSV)
+            successes = sum(bool(row["success"]) for row in rows)
+            plans = len(list((out / PLANS).iterdir()))
+            lines.append([str(k + 1), f"{run.cpu:.1f}", f"{run.cpu / count:.3f}",
+                          f"{run.wall:.1f}", f"{successes} of {len(rows)}", str(plans)])
+    print(f"{count} missions: {SHARED_MAP.name}, {PLAN_SEEDS} planner seeds x {SIM_SEEDS} "
+          f"simulation seeds, gusts {GUSTS:g} N, {SPEED:g} m/s, {ACCELERATION:g} m/s^2, "
+          f"{improve:,} samples of improvement, quadnav batch --workers {workers}\n")
+    print(table(["repeat", "CPU s", "CPU s per mission", "wall s", "successes", "plans made"],
+                lines))
+
+
 def main() -> None:
-    args, count, repeats = study_arguments(__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--shared-plans", action="store_true",
+                        help="case (a): 200 missions sharing 20 plans on rbe595/map1")
+    args, count, repeats = study_arguments("", parser)
+    if args.shared_plans:
+        shared_plans(args.workers, args.improve, repeats)
+        return
     jobs = missions(count)
     batch_runs, fly_runs, agree = [], [], []
     with tempfile.TemporaryDirectory() as scratch:

@@ -13,6 +13,7 @@ from clitools import assert_user_error, run_here
 
 from quadnav.batch.fly_one import fly_mission_spec, fly_row, load_context
 from quadnav.batch.grid import parse_spec
+from quadnav.batch.stages import StageCache
 from quadnav.cli.main import build_parser
 from quadnav.cli.mission_args import mission_config
 from quadnav.config import as_plain
@@ -320,7 +321,7 @@ def test_a_setting_the_one_builder_adds_reaches_every_command(tmp_path, monkeypa
     context = load_context(spec)
     (mission,) = spec.missions()
     assert fly_row(context, mission)["goal_tolerance_m"] == MARK_TOLERANCE
-    assert mission_item(context, mission).settings.goal_tolerance == MARK_TOLERANCE
+    assert mission_item(context, mission, StageCache()).settings.goal_tolerance == MARK_TOLERANCE
     # tello fly plans with the builder's planner settings
     (tmp_path / "room.txt").write_text("boundary 0 0 0 6 2 1.5\n")
     tello = run_here("tello", "fly", tmp_path / "room.txt", "--start", "1", "1", "0",

@@ -435,30 +435,52 @@ def plan_mission(problem: PlanningProblem, settings: MissionSettings,
 def fly_plan(planned: Mission, settings: MissionSettings | None = None,
              flight_progress: Callable[[float], None] | None = None) -> Mission:
     """The rest of :func:`fly_problem` after :func:`plan_mission`: the trajectory along
-    ``planned``'s path and its flight, with ``settings`` (default: ``planned``'s own; the
-    same planning settings, as the path was found with them). An unsolved plan is
-    returned as it is."""
+    ``planned``'s path (:func:`make_reference`) and its flight (:func:`fly_reference`),
+    with ``settings`` (default: ``planned``'s own; the same planning settings, as the path
+    was found with them). An unsolved plan is returned as it is."""
     settings = settings or planned.settings
-    problem, result, raw_length = planned.problem, planned.plan, planned.raw_length
-    world = problem.world
-    timings = {"planning": planned.timings["planning"]}
-    if not result.solved:
+    if not planned.plan.solved:
         return dataclasses.replace(planned, settings=settings)
     began = time.perf_counter()
-    if settings.reference is None:
-        trajectory, chosen = flyable_trajectory(result.path, settings.trajectory,
-                                                SafeSpace(world, problem.margin),
-                                                settings.vehicle, settings.limit_gains,
-                                                settings.fastest)
-        settings = dataclasses.replace(settings, trajectory=chosen)
-    else:
-        trajectory = path_reference(problem, result.path, settings)
-    timings["trajectory"] = time.perf_counter() - began
-    flight = simulate(trajectory, settings.flown_vehicle, world=world, settings=settings.sim,
-                      progress=flight_progress, model=settings.vehicle,
+    trajectory, settings = make_reference(planned.problem, planned.plan.path, settings)
+    return fly_reference(planned, trajectory, settings, time.perf_counter() - began,
+                         flight_progress)
+
+
+def make_reference(problem: PlanningProblem, path: FloatArray, settings: MissionSettings
+                   ) -> tuple[Trajectory | FlatOutputReference, MissionSettings]:
+    """The reference flown along ``path`` (N, 3) m, a solved plan's, and ``settings`` with
+    the trajectory settings that made it: quadnav's trajectory
+    (:func:`~quadnav.sim.envelope.flyable_trajectory`, made for ``settings.vehicle`` with
+    :attr:`~MissionSettings.limit_gains`), or a trajectory class of your own sampled
+    (:func:`path_reference`).
+
+    Raises:
+        QuadnavError: the vehicle cannot fly the trajectory (not ``fastest``), or a class
+            of your own cannot be built.
+    """
+    if settings.reference is not None:
+        return path_reference(problem, path, settings), settings
+    trajectory, chosen = flyable_trajectory(path, settings.trajectory,
+                                            SafeSpace(problem.world, problem.margin),
+                                            settings.vehicle, settings.limit_gains,
+                                            settings.fastest)
+    return trajectory, dataclasses.replace(settings, trajectory=chosen)
+
+
+def fly_reference(planned: Mission, trajectory: Trajectory | FlatOutputReference,
+                  settings: MissionSettings, trajectory_seconds: float,
+                  flight_progress: Callable[[float], None] | None = None) -> Mission:
+    """``trajectory``, made along ``planned``'s path in ``trajectory_seconds`` s of wall
+    time (:func:`make_reference`), flown with ``settings``: the whole mission."""
+    problem = planned.problem
+    flight = simulate(trajectory, settings.flown_vehicle, world=problem.world,
+                      settings=settings.sim, progress=flight_progress, model=settings.vehicle,
                       controller=settings.flying_controller())
-    timings["simulation"] = flight.wall_time
-    return Mission(problem, result, raw_length, trajectory, flight, timings, settings)
+    timings = {"planning": planned.timings["planning"], "trajectory": trajectory_seconds,
+               "simulation": flight.wall_time}
+    return Mission(problem, planned.plan, planned.raw_length, trajectory, flight, timings,
+                   settings)
 
 
 def path_reference(problem: PlanningProblem, path: FloatArray, settings: MissionSettings

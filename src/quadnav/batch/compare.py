@@ -159,10 +159,10 @@ def contender_rows(rows: Sequence[dict[str, Any]], by: Sequence[str]
 
 def _pair_key(row: dict[str, Any], by: Sequence[str]) -> str:
     """What a mission shares with its pair: every grid value but those of ``by``, and the
-    seed."""
+    seeds (the simulation's empty in a table written before it had its own)."""
     skip = {column for axis in by for column in AXES[axis]}
     values = {k: v for k, v in group_values(row).items() if k not in skip}
-    return json.dumps([values, row["seed"]], sort_keys=True)
+    return json.dumps([values, row["seed"], row["sim_seed"]], sort_keys=True)
 
 
 #: What :func:`_spread` gives of a metric's values.

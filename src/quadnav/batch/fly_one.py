@@ -9,7 +9,10 @@ file of the driver's but the plug-ins' (controllers, planners, references, winds
 ``path/to/file.py:Name``), which each worker loads from the spec's text, by the file's
 absolute path. A mission depends only on its spec and the context: the planner's
 budget binds by samples, and the gusts, the vehicle spread and a start and goal drawn for
-a map without its own all come from the seed.
+a map without its own all come from the seeds.
+
+A worker makes each query, plan and reference once (:mod:`~quadnav.batch.stages`): the
+missions it flies that share them share them, and give the rows they give flown alone.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import warnings
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from itertools import product
 from pathlib import Path
 from typing import Any
@@ -24,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from quadnav.batch.grid import DEFAULT_GAINS, BatchSpec, FixedSettings, MissionSpec
+from quadnav.batch.stages import StageCache, plan_key, query_key, worker_cache, world_hash
 from quadnav.batch.table import mission_row
 from quadnav.config import as_plain
 from quadnav.control.registry import controller_gains
@@ -57,6 +62,9 @@ class BatchContext:
         gains: the gains of each controller and gains entry of the grid, loaded, by
             (controller, entry).
         plugins: a hash of each plug-in file the grid names, by its absolute path.
+        plans: the folder where the workers keep the plans they make
+            (:class:`~quadnav.batch.stages.StageCache`); None: each keeps them in memory
+            alone.
     """
 
     fixed: FixedSettings
@@ -64,6 +72,13 @@ class BatchContext:
     worlds: dict[str, World]
     gains: dict[tuple[str, str], Any]
     plugins: dict[str, str] = field(default_factory=dict)
+    plans: Path | None = None
+
+    @cached_property
+    def world_hashes(self) -> dict[str, str]:
+        """A hash of each map's content (:func:`~quadnav.batch.stages.world_hash`), by
+        its name."""
+        return {name: world_hash(world) for name, world in self.worlds.items()}
 
     def fingerprint(self) -> dict:
         """What the files gave, JSON-ready: the vehicle, the gains of each controller, a
@@ -74,19 +89,11 @@ class BatchContext:
             gains.setdefault(controller, {})[name] = as_plain(values)
         plugins = {"plugins": dict(self.plugins)} if self.plugins else {}
         return {"vehicle": as_plain(self.vehicle), "gains": gains,
-                "maps": {name: _world_hash(world) for name, world in self.worlds.items()}
-                } | plugins
+                "maps": dict(self.world_hashes)} | plugins
 
     def files(self, mission: MissionSpec) -> MissionFiles:
         """The vehicle and gains ``mission`` flies with, as loaded."""
         return MissionFiles(self.vehicle, self.gains[mission.controller, mission.gains])
-
-
-def _world_hash(world: World) -> str:
-    parts = [world.boundary, world.blocks, world.start, world.goal, world.margin]
-    digest = hashlib.sha256(repr([None if p is None else np.asarray(p).tolist()
-                                  for p in parts]).encode())
-    return digest.hexdigest()[:16]
 
 
 def plugin_files(spec: BatchSpec) -> dict[str, str]:
@@ -134,7 +141,7 @@ def load_context(spec: BatchSpec) -> BatchContext:
 
 def mission_config(fixed: FixedSettings, mission: MissionSpec) -> MissionConfig:
     """The mission ``mission`` of a batch whose fixed settings are ``fixed``: its map
-    entry's query (its margin, else the batch's), its seed, speed, disturbances, planner,
+    entry's query (its margin, else the batch's), its seeds, speed, disturbances, planner,
     controller and gains, trajectory method or class, and the batch's vehicle, trajectory
     timing, budget and rates."""
     entry = mission.map
@@ -154,7 +161,8 @@ def mission_config(fixed: FixedSettings, mission: MissionSpec) -> MissionConfig:
                                     "accel": fixed.accel},
         "controller": {"name": mission.controller} | gains,
         "simulation": {"physics_rate": fixed.physics_rate,
-                       "control_rate": fixed.control_rate, "settle": fixed.settle},
+                       "control_rate": fixed.control_rate, "settle": fixed.settle,
+                       "seed": mission.sim_seed},
         "disturbances": wind | {"gusts": mission.gusts, "spread": mission.spread},
     }, source="the batch spec")
 
@@ -162,7 +170,8 @@ def mission_config(fixed: FixedSettings, mission: MissionSpec) -> MissionConfig:
 def mission_settings(context: BatchContext, mission: MissionSpec) -> MissionSettings:
     """The settings ``mission`` flies with (:meth:`MissionConfig.settings` of its
     :func:`mission_config`, with the context's vehicle and gains); the plant is the
-    nominal vehicle scaled by :func:`~quadnav.missionconfig.spread_factors`.
+    nominal vehicle scaled by :func:`~quadnav.missionconfig.spread_factors` (of the
+    simulation's seed).
 
     Raises:
         QuadnavError: settings that do not fit together (e.g. a physics rate that is not a
@@ -185,12 +194,13 @@ def given_query(context: BatchContext, mission: MissionSpec
     return mission_config(context.fixed, mission).ends(context.worlds[mission.map.map])
 
 
-def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarray
-                    ) -> PlanningProblem:
+def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarray,
+                    cache: StageCache | None = None) -> PlanningProblem:
     """The mission's checked query for a vehicle whose body has half extents ``body``
-    (3,) m. A start or goal that is not given is drawn from the seed: of
-    :data:`DRAWN_POINTS` free points of the inflated map, the most distant pair (or the
-    point most distant from the given end) that :func:`make_problem` accepts.
+    (3,) m (from ``cache`` when it has it). A start or goal that is not given is drawn
+    from the seed: of :data:`DRAWN_POINTS` free points of the inflated map, the most
+    distant pair (or the point most distant from the given end) that :func:`make_problem`
+    accepts.
 
     Raises:
         QuadnavError: a bad query (a given point in a block, disconnected ends).
@@ -199,9 +209,20 @@ def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarra
     world = context.worlds[mission.map.map]
     margin = config.margin(world)
     start, goal = config.ends(world)
+    if cache is None:
+        return _query(world, start, goal, margin, body, mission.seed)
+    drawn = None if start is not None and goal is not None else mission.seed
+    key = query_key(context.world_hashes[mission.map.map], start, goal, margin, body, drawn)
+    return cache.problem(key, lambda: _query(world, start, goal, margin, body, mission.seed))
+
+
+def _query(world: World, start: np.ndarray | None, goal: np.ndarray | None, margin: float,
+           body: np.ndarray, seed: int) -> PlanningProblem:
+    """The checked query of :func:`mission_problem`, each end not given drawn from
+    ``seed``."""
     if start is not None and goal is not None:
-        return config.problem(world, body)
-    rng = np.random.default_rng([mission.seed, QUERY_STREAM])
+        return make_problem(world, start, goal, margin, body)
+    rng = np.random.default_rng([seed, QUERY_STREAM])
     points = world.inflate(margin).sample_free(DRAWN_POINTS, rng)
     starts = points if start is None else start[None]
     goals = points if goal is None else goal[None]
@@ -214,12 +235,14 @@ def mission_problem(context: BatchContext, mission: MissionSpec, body: np.ndarra
             return make_problem(world, starts[i], goals[j], margin, body)
         except QuadnavError as refused:
             error = refused
-    raise QuadnavError(f"no start and goal drawn from seed {mission.seed} could be joined: "
-                       f"{error}")
+    raise QuadnavError(f"no start and goal drawn from seed {seed} could be joined: {error}")
 
 
-def fly_mission_spec(context: BatchContext, mission: MissionSpec) -> Mission:
-    """Fly ``mission`` (planning warnings silenced: a batch reports in its table).
+def fly_mission_spec(context: BatchContext, mission: MissionSpec,
+                     cache: StageCache | None = None) -> Mission:
+    """Fly ``mission`` (planning warnings silenced: a batch reports in its table), its
+    query, plan and reference from ``cache`` when it has them (kept there when made); the
+    same mission either way.
 
     Raises:
         QuadnavError: a bad query or settings (see :func:`mission_problem`).
@@ -227,25 +250,43 @@ def fly_mission_spec(context: BatchContext, mission: MissionSpec) -> Mission:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         settings = mission_settings(context, mission)
-        return fly_problem(mission_problem(context, mission, settings.body), settings)
+        problem = mission_problem(context, mission, settings.body, cache)
+        if cache is None:
+            return fly_problem(problem, settings)
+        return cache.fly(context.world_hashes[mission.map.map], problem, settings)[1]
 
 
 def fly_row(context: BatchContext, mission: MissionSpec) -> dict:
-    """The results row of ``mission`` (:func:`~.table.mission_row`). Never raises for the
-    mission's own failure: a refused query or setting is a row with ``success`` false and
-    the reason in ``error``."""
+    """The results row of ``mission`` (:func:`flown_row`), flown with this worker's
+    cache (:func:`~quadnav.batch.stages.worker_cache` of ``context.plans``)."""
+    return flown_row(context, mission, worker_cache(context.plans))
+
+
+def fly_rows(context: BatchContext, missions: list[MissionSpec]) -> list[dict]:
+    """The rows of ``missions`` (:func:`fly_row`), flown one after the other on one
+    worker: missions that share a plan, sent together, find it in its cache."""
+    return [fly_row(context, mission) for mission in missions]
+
+
+def flown_row(context: BatchContext, mission: MissionSpec, cache: StageCache | None = None
+              ) -> dict:
+    """The results row of ``mission`` (:func:`~.table.mission_row`), with the key of the
+    plan it flew (:func:`~quadnav.batch.stages.plan_key`), its stages from ``cache`` when
+    given. Never raises for the mission's own failure: a refused query or setting is a row
+    with ``success`` false and the reason in ``error``."""
     start, goal = given_query(context, mission)
     drawn = start is None or goal is None
     try:
-        flown = fly_mission_spec(context, mission)
+        flown = fly_mission_spec(context, mission, cache)
     except QuadnavError as error:
         return mission_row(mission, _factors(mission), drawn, None, str(error),
                            start, goal, mission_margin(context, mission))
-    return mission_row(mission, _factors(mission), drawn, flown)
+    key = plan_key(context.world_hashes[mission.map.map], flown.problem, flown.settings)
+    return mission_row(mission, _factors(mission), drawn, flown, plan_key=key)
 
 
 def _factors(mission: MissionSpec) -> tuple[float, float, float]:
-    return spread_factors(mission.spread, mission.seed)
+    return spread_factors(mission.spread, mission.flight_seed)
 
 
 def warm_up(context: BatchContext) -> None:

@@ -7,15 +7,21 @@ table's columns. A re-run into the same folder must be the same batch: it then s
 missions already in the journal; any other batch is refused (or, with ``restart``, the
 folder's batch files are replaced).
 
-A folder written before controllers, methods, references and wind classes were values of
-the grid (:data:`~quadnav.batch.table.EARLIER_NAMES`) is the same batch as the one its
-spec now reads as (:func:`current_record`): it resumes, and its ``batch.json`` and
-``results.csv`` are then rewritten in today's form (:func:`begin`).
+A folder written before the simulation had seeds of its own and rows said which plan they
+flew (:data:`~quadnav.batch.table.PREVIOUS_NAMES`), or before that, before controllers,
+methods, references and wind classes were values of the grid
+(:data:`~quadnav.batch.table.EARLIER_NAMES`), is the same batch as the one its spec now
+reads as (:func:`current_record`): it resumes, and its ``batch.json`` and ``results.csv``
+are then rewritten in today's form (:func:`begin`).
+
+``plans/`` holds the plans the batch's missions flew (:mod:`~quadnav.batch.stages`), so
+that a resumed batch plans none again.
 """
 
 from __future__ import annotations
 
 import json
+import shutil
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -27,6 +33,7 @@ from quadnav.batch.summary_page import SUMMARY_HTML, write_summary_page
 from quadnav.batch.table import (
     EARLIER_NAMES,
     NAMES,
+    PREVIOUS_NAMES,
     RESULTS_CSV,
     RESULTS_PARQUET,
     read_rows,
@@ -40,6 +47,8 @@ from quadnav.files import atomic_output
 BATCH_JSON = "batch.json"
 #: Every file a batch writes into its folder.
 BATCH_FILES = (BATCH_JSON, RESULTS_CSV, RESULTS_PARQUET, SUMMARY_JSON, SUMMARY_HTML)
+#: The folder of the batch's plans (:class:`~quadnav.batch.stages.StageCache`).
+PLANS = "plans"
 
 
 def batch_record(spec: BatchSpec, context: BatchContext) -> dict[str, Any]:
@@ -80,10 +89,14 @@ def read_record(folder: Path) -> dict[str, Any]:
 
 
 def current_record(record: dict[str, Any]) -> dict[str, Any]:
-    """``record`` as written today: one written before controllers, methods, references
-    and wind classes were values of the grid (its columns :data:`EARLIER_NAMES`) had one
-    ``method``, flew the default controller with no reference, and kept the gains of that
-    controller alone; any other record as it is."""
+    """``record`` as written today: one written before the simulation had seeds of its own
+    (its columns :data:`PREVIOUS_NAMES`) is today's with today's columns, its seeds seeding
+    both; one written before controllers, methods, references and wind classes were values
+    of the grid (its columns :data:`EARLIER_NAMES`) had one ``method``, flew the default
+    controller with no reference, and kept the gains of that controller alone; any other
+    record as it is."""
+    if record.get("columns") == list(PREVIOUS_NAMES):
+        return record | {"columns": list(NAMES)}
     if record.get("columns") != list(EARLIER_NAMES):
         return record
     spec = dict(record["spec"])
@@ -131,14 +144,15 @@ def finished_rows(folder: Path, record: dict[str, Any], missions: Sequence[Missi
 def begin(folder: Path, record: dict[str, Any], restart: bool,
           rows: Sequence[dict[str, Any]]) -> None:
     """Make ``folder`` (created if needed) hold the batch of ``record``, whose finished
-    ``rows`` it holds (:func:`finished_rows`): with ``restart``, the files of the batch it
-    held are removed first; ``batch.json`` is written unless it is there, and with
+    ``rows`` it holds (:func:`finished_rows`): with ``restart``, the files and plans of the
+    batch it held are removed first; ``batch.json`` is written unless it is there, and with
     ``results.csv`` written again in today's form when the folder was written before
     (:func:`current_record`)."""
     folder.mkdir(parents=True, exist_ok=True)
     if restart:
         for name in BATCH_FILES:
             (folder / name).unlink(missing_ok=True)
+        shutil.rmtree(folder / PLANS, ignore_errors=True)
     if (folder / BATCH_JSON).exists() and read_record(folder) == record:
         return
     if (folder / RESULTS_CSV).exists():

@@ -3,7 +3,7 @@ line) and the :class:`MissionSpec` of each of its missions, enumerated in a fixe
 
 A spec is a table (see the README's ``quadnav batch`` section)::
 
-    seeds = 50                       # or a list [0, 1, 5]
+    seeds = 50                       # or a list [0, 1, 5], or {plan = 20, sim = 10}
     speeds = [1.0, 2.0]              # m/s, or "max"
     maps = ["forest", "map.json", {map = "map1.txt", start = [0.1, -4.9, 0.2], goal = [8, 18, 3]}]
     winds = [[0, 0, 0]]              # steady forces, N, or wind classes (grid; defaults)
@@ -98,6 +98,9 @@ GRID_KEYS = ("maps", "seeds", "speeds", "winds", "gusts", "spreads", "planners",
 #: A key that sets one trajectory method, as ``methods = [...]`` with one (a batch's
 #: spec before methods became a list of the grid).
 METHOD_KEY = "method"
+#: Keys of a ``seeds`` table: the planner's seeds and the simulation's, each a count or a
+#: list.
+SEED_KEYS = ("plan", "sim")
 #: Keys of a map entry given as a table.
 MAP_KEYS = ("map", "start", "goal", "start_goal", "margin")
 
@@ -162,7 +165,8 @@ class MissionSpec:
 
     Attributes:
         map: the map and its query.
-        seed: seed of the planner, the gusts, the spread factors and a drawn start/goal.
+        seed: seed of the planner and a drawn start/goal, and unless ``sim_seed`` is
+            given of the gusts and the spread factors.
         speed: top speed, m/s, or ``"max"``: as fast as the vehicle can follow.
         wind: (3,) steady force, N, world frame, or a wind class's spec.
         gusts: gust standard deviation per axis, N.
@@ -174,6 +178,8 @@ class MissionSpec:
             stage.
         reference: a trajectory class's spec flown instead of a method's trajectory, or
             None.
+        sim_seed: seed of the gusts and the spread factors alone (a spec's
+            ``seeds = {plan = ..., sim = ...}``); None: ``seed`` seeds them.
     """
 
     map: MapEntry
@@ -187,16 +193,23 @@ class MissionSpec:
     controller: str = DEFAULT_CONTROLLER
     method: str | None = DEFAULT_METHOD
     reference: str | None = None
+    sim_seed: int | None = None
+
+    @property
+    def flight_seed(self) -> int:
+        """The seed of the gusts and the spread factors: ``sim_seed``, else ``seed``."""
+        return self.seed if self.sim_seed is None else self.sim_seed
 
     @property
     def key(self) -> str:
         """A short stable name of the mission: a hash of its grid values. A mission that
-        flies the default controller and method has the key it had before batches could
-        vary them (:attr:`earlier_key`), so a batch folder written then resumes."""
+        flies the default controller and method with one seed has the key it had before
+        batches could vary them (:attr:`earlier_key`), so a batch folder written then
+        resumes."""
         chosen = {"controller": self.controller, "method": self.method,
-                  "reference": self.reference}
+                  "reference": self.reference, "sim_seed": self.sim_seed}
         defaults = {"controller": DEFAULT_CONTROLLER, "method": DEFAULT_METHOD,
-                    "reference": None}
+                    "reference": None, "sim_seed": None}
         changed = {name: value for name, value in chosen.items() if value != defaults[name]}
         return self._hash([changed] if changed else [])
 
@@ -217,7 +230,9 @@ class MissionSpec:
 
 @dataclass(frozen=True)
 class BatchSpec:
-    """The grid and the fixed settings of a batch (see the module docstring)."""
+    """The grid and the fixed settings of a batch (see the module docstring): ``seeds``
+    seed the planner and, when ``sim_seeds`` is None, the simulation too; else each seed
+    of ``seeds`` is flown with each of ``sim_seeds``."""
 
     maps: tuple[MapEntry, ...]
     seeds: tuple[int, ...]
@@ -231,6 +246,19 @@ class BatchSpec:
     controllers: tuple[str, ...] = (DEFAULT_CONTROLLER,)
     methods: tuple[str, ...] = (DEFAULT_METHOD,)
     references: tuple[str, ...] = (NO_REFERENCE,)
+    sim_seeds: tuple[int, ...] | None = None
+
+    @property
+    def seed_pairs(self) -> list[tuple[int, int | None]]:
+        """Each mission's (seed, sim_seed), in the grid's order: every seed with every
+        simulation seed, or each seed alone (None) when one seed drives both."""
+        return list(product(self.seeds, self.sim_seeds or [None]))
+
+    @property
+    def flight_seeds(self) -> tuple[int, ...]:
+        """The seeds of the simulations (the gusts, the spread): ``sim_seeds``, else
+        ``seeds``."""
+        return self.seeds if self.sim_seeds is None else self.sim_seeds
 
     @property
     def trajectories(self) -> list[tuple[str | None, str | None]]:
@@ -252,20 +280,20 @@ class BatchSpec:
 
     def missions(self) -> list[MissionSpec]:
         """Every mission, in a fixed order: map, speed, wind, gusts, spread, planner,
-        gains, controller, trajectory, then seed (innermost)."""
+        gains, controller, trajectory, then seed, then simulation seed (innermost)."""
         return [MissionSpec(m, seed, speed, wind, gust, spread, planner, gains, controller,
-                            method, reference)
+                            method, reference, sim_seed)
                 for m, speed, wind, gust, spread, planner, gains, controller,
-                (method, reference), seed in product(
+                (method, reference), (seed, sim_seed) in product(
                     self.maps, self.speeds, self.winds, self.gusts, self.spreads,
                     self.planners, self.gains, self.controllers, self.trajectories,
-                    self.seeds)]
+                    self.seed_pairs)]
 
     @property
     def size(self) -> int:
         """Number of missions."""
         return math.prod(len(values) for values in (
-            self.maps, self.seeds, self.speeds, self.winds, self.gusts, self.spreads,
+            self.maps, self.seed_pairs, self.speeds, self.winds, self.gusts, self.spreads,
             self.planners, self.gains, self.controllers, self.trajectories))
 
     def table(self) -> dict[str, Any]:
@@ -276,8 +304,11 @@ class BatchSpec:
         maps = [{key: list(value) if isinstance(value, tuple) else value
                  for key, value in entry.__dict__.items() if value is not None}
                 for entry in self.maps]
+        seeds: list | dict = list(self.seeds)
+        if self.sim_seeds is not None:
+            seeds = {"plan": seeds, "sim": list(self.sim_seeds)}
         return {
-            "maps": maps, "seeds": list(self.seeds),
+            "maps": maps, "seeds": seeds,
             "speeds": list(self.speeds),
             "winds": [w if isinstance(w, str) else list(w) for w in self.winds],
             "gusts": list(self.gusts),
@@ -327,9 +358,10 @@ def parse_spec(table: dict[str, Any], folder: str | Path,
             raise QuadnavError(f"{src.name}: missing key {key!r}: a batch needs maps, seeds "
                                "and speeds")
     fixed = _fixed(table, folder, src)
+    seeds, sim_seeds = _seed_lists(table["seeds"], src)
     spec = BatchSpec(
         maps=tuple(_map_entry(item, folder, src) for item in _list(table, "maps", src)),
-        seeds=_seeds(table["seeds"], src),
+        seeds=seeds,
         speeds=tuple(_speed(value, src) for value in _list(table, "speeds", src)),
         winds=tuple(_wind(value, folder, src)
                     for value in _list(table, "winds", src, [[0, 0, 0]])),
@@ -346,7 +378,8 @@ def parse_spec(table: dict[str, Any], folder: str | Path,
                                              [DEFAULT_CONTROLLER])),
         methods=_methods(table, src),
         references=tuple(_reference(value, folder, src)
-                         for value in _list(table, "references", src, [NO_REFERENCE])))
+                         for value in _list(table, "references", src, [NO_REFERENCE])),
+        sim_seeds=sim_seeds)
     if NO_REFERENCE not in spec.references and (
             "methods" in table or METHOD_KEY in table):
         key = "methods" if "methods" in table else METHOD_KEY
@@ -388,13 +421,39 @@ def _point(value: Any, key: str, src: _Source) -> tuple[float, float, float]:
     return x, y, z
 
 
-def _seeds(value: Any, src: _Source) -> tuple[int, ...]:
-    if isinstance(value, list):
-        seeds = tuple(_number(v, SEED, "seeds", src) for v in _list({"seeds": value},
-                                                                     "seeds", src))
-        return tuple(int(seed) for seed in seeds)
-    count = _number(value, SEED_COUNT, "seeds", src)
-    return tuple(range(int(count)))
+def _seed_lists(value: Any, src: _Source) -> tuple[tuple[int, ...], tuple[int, ...] | None]:
+    """The seeds of the planner and of the simulation (None: the planner's seed them
+    too): a count or a list for both, or a table ``{plan = ..., sim = ...}`` of two."""
+    if not isinstance(value, dict):
+        return _seeds(value, src), None
+    for key in value:
+        if key not in SEED_KEYS:
+            raise src.error("seeds", f"unknown key {key!r} in a seeds table; expected "
+                                     f"{' and '.join(SEED_KEYS)}")
+    missing = [key for key in SEED_KEYS if key not in value]
+    if missing:
+        raise src.error("seeds", f"a seeds table needs {' and '.join(SEED_KEYS)}, each a "
+                                 f"count or a list; {missing[0]} is missing")
+    return _seeds(value["plan"], src, "plan: "), _seeds(value["sim"], src, "sim: ")
+
+
+def _seeds(value: Any, src: _Source, part: str = "") -> tuple[int, ...]:
+    """Seeds 0 to N - 1 for a count N, or a list of seeds; ``part`` begins each message
+    (``plan: `` for a seeds table's ``plan``)."""
+    if not isinstance(value, list):
+        return tuple(range(int(_seed(value, SEED_COUNT, src, part))))
+    if not value:
+        raise src.error("seeds", f"{part}expected at least one value, got an empty list")
+    if len(value) != len({json.dumps(v) for v in value}):
+        raise src.error("seeds", f"{part}a value is listed twice")
+    return tuple(_seed(v, SEED, src, part) for v in value)
+
+
+def _seed(value: Any, allowed: Range, src: _Source, part: str) -> int:
+    """One seed, or a count of seeds, in ``allowed``."""
+    if not _is_number(value) or value not in allowed:
+        raise src.error("seeds", f"{part}expected {allowed.describe()}, got {value!r}")
+    return int(value)
 
 
 def _speed(value: Any, src: _Source) -> Speed:

@@ -4,25 +4,55 @@ The spec's files are loaded and the folder checked first (nothing is written for
 input); then the missions not yet in the journal fly on the executor's workers, each
 finished row journaled at once; the tables and summaries are written at the end, and also
 when the run is stopped (Ctrl-C, SIGTERM), from every row finished by then.
+
+Missions that may share a plan (the same map, planner and seed) are sent to one worker
+together (:func:`plan_jobs`), so that it plans once for them all; local workers keep the
+plans in the folder's ``plans/`` for a resumed run, a Ray cluster's each in its memory.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from quadnav.batch.executor import open_executor
-from quadnav.batch.fly_one import fly_row, load_context, warm_up
+from quadnav.batch.executor import cpu_count, open_executor
+from quadnav.batch.fly_one import fly_rows, load_context, warm_up
 from quadnav.batch.folder import (
+    PLANS,
     batch_record,
     begin,
     finished_rows,
     ordered_rows,
     write_outputs,
 )
-from quadnav.batch.grid import BatchSpec
+from quadnav.batch.grid import BatchSpec, MissionSpec
 from quadnav.batch.table import RESULTS_CSV, Journal
+
+#: Jobs per worker a batch is cut into at least, when its missions allow: a group of
+#: missions that share a plan is cut (each part planning again) so that every worker has
+#: work to the end.
+JOBS_PER_WORKER = 4
+#: The fewest missions of a part of a group cut: fewer are not worth planning again.
+LEAST_JOB = 4
+
+
+def plan_jobs(missions: Sequence[MissionSpec], workers: int) -> list[list[MissionSpec]]:
+    """``missions`` cut into jobs for ``workers`` workers: those that may share a plan
+    (the same map entry, planner and seed) together, in the order each group first comes;
+    a group is cut into parts of at least :data:`LEAST_JOB` missions when there are fewer
+    than :data:`JOBS_PER_WORKER` groups a worker."""
+    groups: dict[tuple, list[MissionSpec]] = {}
+    for mission in missions:
+        groups.setdefault((mission.map, mission.planner, mission.seed), []).append(mission)
+    parts = math.ceil(workers * JOBS_PER_WORKER / max(len(groups), 1))
+    jobs = []
+    for group in groups.values():
+        size = max(LEAST_JOB, math.ceil(len(group) / parts))
+        jobs += [group[k:k + size] for k in range(0, len(group), size)]
+    return jobs
 
 
 class BatchRun:
@@ -69,9 +99,12 @@ class BatchRun:
         """
         executor = None
         ran_on = None
-        if self.todo:
-            executor = open_executor(self.context, warm_up,
-                                     min(workers, len(self.todo)) if workers else None,
+        jobs = plan_jobs(self.todo, workers or cpu_count())
+        if jobs:
+            # the plans kept on disk where the workers share the driver's disk
+            plans = None if ray and address is not None else self.folder / PLANS
+            executor = open_executor(replace(self.context, plans=plans), warm_up,
+                                     min(workers, len(jobs)) if workers else None,
                                      ray, address)
             ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
@@ -81,11 +114,12 @@ class BatchRun:
                 if executor is not None:
                     if on_start is not None:
                         on_start(executor.workers, executor.numba_threads)
-                    for _, row in executor.map_unordered(fly_row, self.todo):
-                        journal.append(row)
-                        self.rows[row["mission_key"]] = row
-                        if on_row is not None:
-                            on_row(row)
+                    for _, rows in executor.map_unordered(fly_rows, jobs):
+                        for row in rows:
+                            journal.append(row)
+                            self.rows[row["mission_key"]] = row
+                            if on_row is not None:
+                                on_row(row)
             except BaseException:
                 if executor is not None:  # stop the workers before writing the outputs
                     executor.close(cancel=True)

@@ -4,7 +4,8 @@ keeps every finished row, and the Parquet and CSV files.
 One row per mission: its key, its grid values, the factors of its flown vehicle, where
 its start and goal came from, every key of :meth:`~quadnav.mission.Mission.metrics`
 (the points ``start``, ``goal`` and ``goal_asked`` as ``start_x`` ... ``goal_asked_z``),
-what ended the search, and
+what ended the search, the key of the plan it flew (``plan_key``, shared by the missions
+that flew one plan: :mod:`~quadnav.batch.stages`), and
 ``error``: why a mission was refused (None when it flew or found no path). The schema
 (:data:`COLUMNS`) is explicit, so the Parquet and CSV files have the same columns and types
 whatever rows failed.
@@ -43,7 +44,7 @@ POINTS = ("start", "goal", "goal_asked")
 
 #: The grid values of a mission and its flown vehicle's factors.
 GRID_COLUMNS: tuple[tuple[str, str], ...] = (
-    ("mission_key", STR), ("map", STR), ("seed", INT), ("speed", FLOAT),
+    ("mission_key", STR), ("map", STR), ("seed", INT), ("sim_seed", INT), ("speed", FLOAT),
     ("wind_x", FLOAT), ("wind_y", FLOAT), ("wind_z", FLOAT), ("wind_model", STR),
     ("gusts", FLOAT),
     ("spread", STR), ("spread_mass", FLOAT), ("spread_thrust", FLOAT), ("spread_drag", FLOAT),
@@ -54,6 +55,9 @@ GRID_COLUMNS: tuple[tuple[str, str], ...] = (
 #: The columns of the grid values added when controllers, methods, references and wind
 #: classes became values of the grid: a table written before has none of them.
 ADDED_COLUMNS = ("wind_model", "controller", "method", "reference")
+#: The columns added when the simulation got seeds of its own and missions shared plans:
+#: a table written before has none of them.
+PLAN_COLUMNS = ("sim_seed", "plan_key")
 #: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
 METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("success", BOOL), *((f"{point}_{a}", FLOAT) for point in POINTS for a in AXES),
@@ -74,11 +78,14 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("sim_load_time_s", FLOAT), ("sim_wall_time_s", FLOAT), ("real_time_factor", FLOAT),
 )
 #: Every column, in order, with its type.
-COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("error", STR))
+COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("plan_key", STR),
+           ("error", STR))
 NAMES = tuple(name for name, _ in COLUMNS)
 TYPES = dict(COLUMNS)
+#: The columns of a table written before :data:`PLAN_COLUMNS` were added.
+PREVIOUS_NAMES = tuple(name for name in NAMES if name not in PLAN_COLUMNS)
 #: The columns of a table written before :data:`ADDED_COLUMNS` were added.
-EARLIER_NAMES = tuple(name for name in NAMES if name not in ADDED_COLUMNS)
+EARLIER_NAMES = tuple(name for name in PREVIOUS_NAMES if name not in ADDED_COLUMNS)
 #: Columns of wall time, which differ between runs of the same mission.
 WALL_TIME_COLUMNS = ("planning_time_s", "trajectory_time_s", "sim_load_time_s",
                      "sim_wall_time_s", "real_time_factor")
@@ -89,13 +96,15 @@ RESULTS_PARQUET = "results.parquet"
 def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn: bool,
                 flown: Mission | None, error: str | None = None,
                 start: np.ndarray | None = None, goal: np.ndarray | None = None,
-                margin: float | None = None) -> dict[str, Any]:
+                margin: float | None = None, plan_key: str | None = None) -> dict[str, Any]:
     """The row of ``mission``: its grid values, the spread ``factors`` (mass, thrust,
     drag) and whether its start and goal were ``drawn``; then the metrics of the mission
-    ``flown``, or for a refused mission (``flown`` None) the ``error`` and what is known of
-    its query (``start``, ``goal`` (3,) m or None, ``margin`` m)."""
+    ``flown`` and the key of its plan, or for a refused mission (``flown`` None) the
+    ``error`` and what is known of its query (``start``, ``goal`` (3,) m or None,
+    ``margin`` m)."""
     row: dict[str, Any] = dict.fromkeys(NAMES) | mission_columns(mission)
     row["start_goal_drawn"] = drawn
+    row["plan_key"] = plan_key
     row |= dict(zip(("mass_factor", "thrust_factor", "drag_factor"), factors, strict=True))
     if flown is None:
         row |= {"success": False, "path_found": False, "collision": False,
@@ -115,7 +124,8 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
 
 
 def mission_columns(mission: MissionSpec) -> dict[str, Any]:
-    """The columns of ``mission``'s grid values: its key, map, seed, speed (None: max),
+    """The columns of ``mission``'s grid values: its key, map, seed and the simulation's
+    (:attr:`~quadnav.batch.grid.MissionSpec.flight_seed`), speed (None: max),
     wind (a force's ``wind_x`` ... ``wind_z``, or 0 and its class's spec as
     ``wind_model``), gusts, spread, planner, gains, controller, and method or reference."""
     spread, wind = mission.spread, mission.wind
@@ -123,6 +133,7 @@ def mission_columns(mission: MissionSpec) -> dict[str, Any]:
     force = (0.0, 0.0, 0.0) if isinstance(wind, str) else wind
     return {
         "mission_key": mission.key, "map": mission.map.map, "seed": mission.seed,
+        "sim_seed": mission.flight_seed,
         "speed": None if mission.speed == MAX_SPEED else mission.speed,  # empty: max
         "wind_model": model, "gusts": mission.gusts, "spread": spread.label,
         "spread_mass": spread.mass, "spread_thrust": spread.thrust,
@@ -175,27 +186,29 @@ def csv_line(row: dict[str, Any]) -> str:
 
 
 HEADER = ",".join(NAMES) + "\n"
-#: The header of a table written before :data:`ADDED_COLUMNS` were added.
-EARLIER_HEADER = ",".join(EARLIER_NAMES) + "\n"
+#: The columns of a table written before today's, most recent first.
+OLDER_NAMES = (PREVIOUS_NAMES, EARLIER_NAMES)
 
 
 def read_rows(path: Path, missions: Sequence[MissionSpec] = ()) -> list[dict[str, Any]]:
     """The rows of a results.csv (or journal); a last line without its newline (cut short
-    by a kill) is dropped. A table written before :data:`ADDED_COLUMNS` were added is read
-    too, each row completed from its mission among ``missions`` (found by its
-    :attr:`~quadnav.batch.grid.MissionSpec.earlier_key`; the row takes the mission's
-    key). QuadnavError naming the file and line if it is not a table.
+    by a kill) is dropped. A table written before :data:`PLAN_COLUMNS` (or also
+    :data:`ADDED_COLUMNS`) were added is read too, each row completed from its mission
+    among ``missions`` (found by its key, or its
+    :attr:`~quadnav.batch.grid.MissionSpec.earlier_key` in a table without
+    :data:`ADDED_COLUMNS`; the row takes the mission's key; ``plan_key`` stays empty).
+    QuadnavError naming the file and line if it is not a table.
     """
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise QuadnavError(f"{path}: cannot read: {error.strerror}") from None
-    earlier = text.startswith(EARLIER_HEADER)
-    if not (text.startswith(HEADER) or earlier):
+    names = next((names for names in (NAMES, *OLDER_NAMES)
+                  if text.startswith(",".join(names) + "\n")), None)
+    if names is None:
         raise QuadnavError(f"{path}:1: expected the header of a quadnav batch table "
                            f"({len(NAMES)} columns, from {NAMES[0]} to {NAMES[-1]})")
-    names = EARLIER_NAMES if earlier else NAMES
-    body = text[len(EARLIER_HEADER if earlier else HEADER):]
+    body = text[len(",".join(names)) + 1:]
     body = body[:body.rfind("\n") + 1]
     rows = []
     for number, fields in enumerate(csv.reader(io.StringIO(body)), start=2):
@@ -207,10 +220,13 @@ def read_rows(path: Path, missions: Sequence[MissionSpec] = ()) -> list[dict[str
                 for name, field in zip(names, fields, strict=True)})
         except ValueError as error:
             raise QuadnavError(f"{path}:{number}: {error}") from None
-    if earlier:
-        by_key = {mission.earlier_key: mission for mission in missions}
+    if names != NAMES:
+        earlier = names == EARLIER_NAMES
+        by_key = {mission.earlier_key if earlier else mission.key: mission
+                  for mission in missions}
+        missing = {"mission_key", *(name for name in NAMES if name not in names)}
         rows = [row | {name: value for name, value in mission_columns(mission).items()
-                       if name in (*ADDED_COLUMNS, "mission_key")}
+                       if name in missing}
                 if (mission := by_key.get(row["mission_key"])) is not None else row
                 for row in rows]
     return rows

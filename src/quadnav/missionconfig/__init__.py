@@ -40,6 +40,7 @@ defaults::
     physics_rate = 1000.0         # Hz
     control_rate = 1000.0         # Hz
     settle = 2.0                  # s flown after the reference ends
+    seed = 7                      # the gusts' and the spread's alone (default: the mission's)
 
     [disturbances]
     wind = [0.0, 0.0, 0.0]        # N, world frame

@@ -71,7 +71,8 @@ class MissionConfig(Section):
 
     Attributes:
         map: a map file, a built-in world spec or a course map (``course:NAME``).
-        seed: seeds the planner, the gusts and the vehicle spread.
+        seed: seeds the planner, a batch's drawn start and goal, and (unless
+            ``simulation.seed`` is set) the gusts and the vehicle spread.
         vehicle: a vehicle preset, a vehicle TOML file or spec, or a table of a vehicle's
             keys (as a vehicle file's, on top of ``based_on``, default ``tello``).
         query: start, goal and margin.
@@ -201,8 +202,14 @@ class MissionConfig(Section):
                                 settle_time=self.simulation.settle,
                                 wind=self.disturbances.wind,
                                 wind_model=self.disturbances.wind_model,
-                                gust_std=self.disturbances.gusts, seed=self.seed),
-                plant=spread_plant(files.vehicle, self.disturbances.spread, self.seed))
+                                gust_std=self.disturbances.gusts, seed=self.flight_seed),
+                plant=spread_plant(files.vehicle, self.disturbances.spread, self.flight_seed))
+
+    @property
+    def flight_seed(self) -> int:
+        """The seed of the gusts and the vehicle spread: ``simulation.seed``, else the
+        mission's."""
+        return self.seed if self.simulation.seed is None else self.simulation.seed
 
     def ends(self, world: World) -> tuple[np.ndarray | None, np.ndarray | None]:
         """The start and goal on ``world``, each (3,) m or None (none known): each one

@@ -16,6 +16,7 @@ from quadnav.limits import (
     PLAN_TIME,
     RATE,
     SAMPLES,
+    SEED,
     SETTLE,
     SPREAD,
     Speed,
@@ -136,17 +137,21 @@ class Controller(Section):
 
 
 class Simulation(Section):
-    """``[simulation]``: rates and the settling time.
+    """``[simulation]``: rates, the settling time and the flight's own seed.
 
     Attributes:
         physics_rate: RK4 steps per second, Hz.
         control_rate: controller updates per second, Hz.
         settle: time flown after the reference ends, s.
+        seed: the seed of the gusts and the vehicle spread alone; None: the mission's
+            (which seeds the planner too). A batch with separate planner and simulation
+            seeds sets it.
     """
 
     physics_rate: Annotated[float, number(RATE)] = SimSettings.physics_rate
     control_rate: Annotated[float, number(RATE)] = SimSettings.control_rate
     settle: Annotated[float, number(SETTLE)] = SimSettings.settle_time
+    seed: Annotated[int | None, number(SEED, optional=True)] = None
 
 
 class Spread(Section):

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from weakref import WeakKeyDictionary
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -115,6 +116,12 @@ def trajectory_margins(trajectory: Trajectory, world: World, spacing: float = 0.
     return windowed_margins(t, margins, trajectory.main_window)
 
 
+#: The margins :func:`reference_margins` measured, by reference and world.
+_MEASURED: WeakKeyDictionary[Trajectory | FlatOutputReference,
+                             WeakKeyDictionary[World, tuple[float, float | None]]] = (
+    WeakKeyDictionary())
+
+
 def reference_margins(reference: Trajectory | FlatOutputReference, world: World
                       ) -> tuple[float, float | None]:
     """The margin (per axis, m) ``reference`` keeps from the real blocks and the boundary of
@@ -122,12 +129,19 @@ def reference_margins(reference: Trajectory | FlatOutputReference, world: World
     :class:`~quadnav.trajectory.model.Trajectory` by :func:`trajectory_margins`; a
     trajectory class's samples (:class:`~quadnav.trajectory.plain.FlatOutputReference`, what
     the closed loop flies, at the control rate) taken as straight between consecutive
-    samples, each stretch measured by its bounding box, as a flight's track is."""
-    if isinstance(reference, Trajectory):
-        return trajectory_margins(reference, world)
-    samples = reference.samples
-    return windowed_margins(samples.t, segment_box_margins(world, samples.position),
-                            reference.main_window)
+    samples, each stretch measured by its bounding box, as a flight's track is. Measured
+    once for a reference and a world while both live (both are immutable): the missions of
+    a batch that fly one trajectory share it."""
+    measured = _MEASURED.setdefault(reference, WeakKeyDictionary())
+    if world not in measured:
+        if isinstance(reference, Trajectory):
+            measured[world] = trajectory_margins(reference, world)
+        else:
+            samples = reference.samples
+            measured[world] = windowed_margins(
+                samples.t, segment_box_margins(world, samples.position),
+                reference.main_window)
+    return measured[world]
 
 
 def within_window(t: FloatArray, window: tuple[float, float]) -> np.ndarray:

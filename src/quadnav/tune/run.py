@@ -21,6 +21,7 @@ import optuna
 
 from quadnav.batch.executor import Executor, open_executor
 from quadnav.batch.fly_one import warm_up
+from quadnav.batch.stages import StageCache
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains
 from quadnav.control.registry import DEFAULT_CONTROLLER, controller_gains
@@ -108,11 +109,13 @@ class TuneRun:
         self.began = time.perf_counter()
 
     def plan(self) -> dict[str, list[TuneItem]]:
-        """Each set's items, its missions planned for the vehicle with the starting gains
-        (QuadnavError for a mission that cannot be planned)."""
+        """Each set's items, its missions planned for the vehicle with the starting gains,
+        a plan or trajectory two missions share made once (QuadnavError for a mission that
+        cannot be planned)."""
+        cache = StageCache()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", PlanningWarning)
-            return {name: set_items(tune_set, self.vehicle, self.start)
+            return {name: set_items(tune_set, self.vehicle, self.start, cache)
                     for name, tune_set in self.sets.items()}
 
     def run(self, items: dict[str, list[TuneItem]], workers: int | None = None,

@@ -14,7 +14,9 @@ and gust level::
     gusts = [0.01]
 
 A mission is planned once, with the starting gains, and its trajectory kept: tuning
-changes how it is flown, not what is flown. The shipped sets (:data:`SHIPPED_SETS`) are a
+changes how it is flown, not what is flown. Missions that share a plan or a trajectory
+(another wind, gust level or spread, another simulation seed) make it once
+(:class:`~quadnav.batch.stages.StageCache`). The shipped sets (:data:`SHIPPED_SETS`) are a
 training set and a held-out set of different references, maps and seeds.
 """
 
@@ -29,11 +31,11 @@ from typing import Any
 
 from quadnav.batch.fly_one import BatchContext, load_context, mission_problem, mission_settings
 from quadnav.batch.grid import BatchSpec, MissionSpec, parse_spec
+from quadnav.batch.stages import StageCache
 from quadnav.config import read_toml
 from quadnav.control.gains import Gains
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.limits import speed_text
-from quadnav.mission import fly_problem
 from quadnav.sim.settings import SimSettings
 from quadnav.tracking import track_world
 from quadnav.trajectory.reference import Reference
@@ -75,7 +77,8 @@ class TuneSet:
     Attributes:
         name: the set's file or shipped name, for reports.
         references: (reference, its spec or file) pairs.
-        seeds: seeds the references are flown with (their gusts).
+        seeds: seeds the references are flown with (their gusts): the missions'
+            simulation seeds.
         winds: steady forces the references are flown in, N.
         gusts: gust levels the references are flown in, N.
         missions: the mission grid (None: references only).
@@ -119,7 +122,7 @@ def _parse(table: dict[str, Any], folder: Path, name: str, vehicle: str) -> Tune
     grid = {"maps": ["empty"], "speeds": [1.0], "seeds": [0]} | table | {"vehicle": vehicle}
     spec = parse_spec(grid, folder, name)
     references = tuple((_reference(s, folder, name), s) for s in specs)
-    return TuneSet(name, references, spec.seeds, spec.winds, spec.gusts,
+    return TuneSet(name, references, spec.flight_seeds, spec.winds, spec.gusts,
                    spec if "maps" in table else None)
 
 
@@ -151,28 +154,37 @@ def _disturbance(wind: tuple[float, float, float], gusts: float) -> str:
     return f" ({', '.join(words)})" if words else ""
 
 
-def mission_item(context: BatchContext, mission: MissionSpec) -> TuneItem:
+def mission_item(context: BatchContext, mission: MissionSpec, cache: StageCache) -> TuneItem:
     """``mission`` planned, and its trajectory made, with the context's gains (planning
-    warnings silenced). QuadnavError for a bad query or a mission that finds no path."""
+    warnings silenced), each found in ``cache`` when made before. QuadnavError for a bad
+    query or a mission that finds no path."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", PlanningWarning)
         settings = mission_settings(context, mission)
-        flown = fly_problem(mission_problem(context, mission, settings.body), settings)
-    label = (f"{mission.map.map} {speed_text(mission.speed)} "
-             f"m/s{_disturbance(mission.wind, mission.gusts)}, seed {mission.seed}")
-    if flown.trajectory is None:
-        raise QuadnavError(f"{label}: no path to fly ({flown.plan.message})")
-    return TuneItem(label, flown.trajectory, flown.problem.world, settings.sim,
-                    settings.plant)
+        world = context.world_hashes[mission.map.map]
+        problem = mission_problem(context, mission, settings.body, cache)
+        key, planned = cache.plan(world, problem, settings)
+        seed = f"seed {mission.seed}" + ("" if mission.sim_seed is None
+                                         else f", sim seed {mission.sim_seed}")
+        label = (f"{mission.map.map} {speed_text(mission.speed)} "
+                 f"m/s{_disturbance(mission.wind, mission.gusts)}, {seed}")
+        if not planned.plan.solved:
+            raise QuadnavError(f"{label}: no path to fly ({planned.plan.message})")
+        reference, settings, _ = cache.reference(key, planned, settings)
+    return TuneItem(label, reference, problem.world, settings.sim, settings.plant)
 
 
-def set_items(tune_set: TuneSet, vehicle: VehicleParams, gains: Gains) -> list[TuneItem]:
+def set_items(tune_set: TuneSet, vehicle: VehicleParams, gains: Gains,
+              cache: StageCache | None = None) -> list[TuneItem]:
     """The items of ``tune_set``: its references, then its missions planned for
-    ``vehicle`` flown with ``gains`` (the starting gains)."""
+    ``vehicle`` flown with ``gains`` (the starting gains), their plans and trajectories
+    kept in ``cache`` (None: one of this call's own)."""
     items = reference_items(tune_set)
     if tune_set.missions is not None:
+        cache = cache or StageCache()
         context = load_context(tune_set.missions)
         context = BatchContext(context.fixed, vehicle, context.worlds,
                                dict.fromkeys(context.gains, gains))
-        items += [mission_item(context, mission) for mission in tune_set.missions.missions()]
+        items += [mission_item(context, mission, cache)
+                  for mission in tune_set.missions.missions()]
     return items

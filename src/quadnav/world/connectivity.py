@@ -16,10 +16,13 @@ resolution (a passage narrower than about two voxels may be missed).
 
 from __future__ import annotations
 
+from weakref import WeakKeyDictionary
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
+from quadnav.arrays import FloatArray
 from quadnav.world.model import World
 
 #: Voxel budget for the default resolution.
@@ -87,21 +90,42 @@ def disconnected(world: World, start: ArrayLike, goal: ArrayLike,
     lies inside one closed block, so it holds no free point. Any free path crosses a chain
     of unblocked voxels that share a face, edge or corner; when the start's and goal's
     voxels are in different 26-connected components of unblocked voxels, no such chain and
-    so no path exists: ``True`` is a proof. ``False`` proves nothing.
+    so no path exists: ``True`` is a proof. ``False`` proves nothing. The components of a
+    world are labelled once (:func:`unblocked_components`).
     """
     points = np.array([start, goal], dtype=np.float64)
-    shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)
-                               - _ROUNDING), 1).astype(np.int64)
-    voxel = world.extent / shape
-    # Voxel i is inside [lo, hi] when lo <= origin + i v and origin + (i + 1) v <= hi;
-    # rounding shrinks the index range, so it can only leave more voxels unblocked.
-    first = np.ceil((world.blocks[:, :3] - world.lower) / voxel + _ROUNDING)
-    last = np.floor((world.blocks[:, 3:] - world.lower) / voxel - 1 - _ROUNDING)
-    blocked = _covered(first.astype(np.int64), last.astype(np.int64), shape)
+    labels, voxel = unblocked_components(world, max_voxels)
+    shape = np.array(labels.shape)
     cells = np.clip(np.floor((points - world.lower) / voxel), 0, shape - 1).astype(np.int64)
-    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3), dtype=bool))
     start_label, goal_label = labels[tuple(cells[0])], labels[tuple(cells[1])]
     return bool(start_label and goal_label and start_label != goal_label)
+
+
+#: The components :func:`unblocked_components` labelled, by world and voxel budget.
+_COMPONENTS: WeakKeyDictionary[World, dict[int, tuple[NDArray[np.int32], FloatArray]]] = (
+    WeakKeyDictionary())
+
+
+def unblocked_components(world: World, max_voxels: int) -> tuple[NDArray[np.int32],
+                                                                   FloatArray]:
+    """The 26-connected components of the unblocked voxels of ``world`` cut into at most
+    ``max_voxels`` voxels (see :func:`disconnected`): a label per voxel (0: blocked), and
+    the voxel's size (3,), m. Labelled once per world while it lives (a world is
+    immutable): the missions of a batch on one map and margin share them."""
+    kept = _COMPONENTS.setdefault(world, {})
+    if max_voxels not in kept:
+        shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)
+                                   - _ROUNDING), 1).astype(np.int64)
+        voxel = world.extent / shape
+        # Voxel i is inside [lo, hi] when lo <= origin + i v and origin + (i + 1) v <= hi;
+        # rounding shrinks the index range, so it can only leave more voxels unblocked.
+        first = np.ceil((world.blocks[:, :3] - world.lower) / voxel + _ROUNDING)
+        last = np.floor((world.blocks[:, 3:] - world.lower) / voxel - 1 - _ROUNDING)
+        blocked = _covered(first.astype(np.int64), last.astype(np.int64), shape)
+        labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3), dtype=bool))
+        labels.flags.writeable = False
+        kept[max_voxels] = labels, voxel
+    return kept[max_voxels]
 
 
 def _occupied(

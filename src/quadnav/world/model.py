@@ -30,6 +30,8 @@ DEFAULT_BLOCK_COLOR = (0.6, 0.6, 0.6)
 #: Safety margin, metres, of a query on a map without a margin of its own; the margin
 #: built-in worlds recommend and are proven flyable with.
 DEFAULT_MARGIN = 0.2
+#: Inflated worlds a world keeps, the last margins asked (:meth:`World.inflate`).
+KEPT_INFLATIONS = 4
 
 
 def _frozen(values: ArrayLike, shape: tuple[int, ...], what: str,
@@ -140,6 +142,11 @@ class World:
         if self.margin is not None:
             set_(self, "margin", float(MARGIN.check(self.margin, "margin")))
 
+    def __getstate__(self) -> dict[str, object]:
+        """The fields and what was computed from them, but the inflated worlds kept
+        (:meth:`inflate`), which a copy sent to a worker would carry for nothing."""
+        return {name: value for name, value in self.__dict__.items() if name != "_inflated"}
+
     def __setstate__(self, state: dict[str, object]) -> None:
         """Restore an unpickled world (a batch worker's copy of a mission): numpy unpickles
         arrays writable, so the fields are made read-only again, as the constructor makes
@@ -187,14 +194,22 @@ class World:
         return self.margin if self.margin is not None else DEFAULT_MARGIN
 
     def inflate(self, margin: float) -> World:
-        """A new World whose blocks grow and whose boundary shrinks by ``margin`` metres.
+        """A World whose blocks grow and whose boundary shrinks by ``margin`` metres.
 
         Each block grows by ``margin`` along every axis (the Minkowski sum with a cube,
         which contains the one with a ball), so every point within ``margin`` of an
         obstacle or of the boundary is outside the inflated world's free space.
+
+        A world is immutable, so the inflated world of each of the last
+        :data:`KEPT_INFLATIONS` margins asked is made once and kept, with what it computes
+        once (its block grid): the missions of a batch on one map share them.
         """
         if not (np.isfinite(margin) and margin >= 0):
             raise ValueError(f"margin must be a finite number >= 0, got {margin}")
+        kept = self._inflated
+        if margin in kept:
+            kept[margin] = kept.pop(margin)  # the most recently asked last
+            return kept[margin]
         grow = np.array([-margin] * 3 + [margin] * 3)
         boundary = self.boundary - grow
         if np.any(boundary[:3] >= boundary[3:]):
@@ -202,7 +217,15 @@ class World:
                 f"{self.name}: margin {margin:g} m leaves no free space in a boundary of size "
                 f"{' x '.join(f'{e:g}' for e in self.extent)} m"
             )
-        return self.replace(boundary=boundary, blocks=self.blocks + grow)
+        kept[margin] = self.replace(boundary=boundary, blocks=self.blocks + grow)
+        if len(kept) > KEPT_INFLATIONS:
+            del kept[next(iter(kept))]
+        return kept[margin]
+
+    @cached_property
+    def _inflated(self) -> dict[float, World]:
+        """The inflated worlds :meth:`inflate` keeps, by margin, the oldest asked first."""
+        return {}
 
     # ---------------------------------------------------------------- queries
     def points_free(self, points: ArrayLike) -> NDArray[np.bool_]:
