@@ -20,7 +20,9 @@ defaults::
     name = "rrtstar"              # a planner's name (ompl:NAME) or a plug-in spec
     time = 10.0                   # s, the search's wall-time cap
     iterations = 0                # samples in all, 0: no cap
-    improve = 50000               # samples after the first path
+    improve = 50000               # samples after the first path, at most
+    stall = 5000                  # stop when the best length shortened by at most
+    stall_fraction = 0.005        # this fraction over this many samples (0: a fixed budget)
     refine = true                 # shortcut and smooth the path
 
     [trajectory]

@@ -33,6 +33,7 @@ from quadnav.missionconfig.sections import (
 )
 from quadnav.missionconfig.source import Source
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
+from quadnav.planning.stall import stall_rule
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import (
@@ -188,6 +189,8 @@ class MissionConfig(Section):
                 planning=PlannerSettings(time_limit=self.planner.time,
                                          max_iterations=self.planner.iterations or None,
                                          improve_iterations=self.planner.improve,
+                                         stall=stall_rule(self.planner.stall,
+                                                          self.planner.stall_fraction),
                                          seed=self.seed),
                 refine=self.planner.refine,
                 trajectory=TrajectorySettings(
