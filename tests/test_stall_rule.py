@@ -152,3 +152,20 @@ def test_a_bad_stall_setting_is_one_line_naming_it(tmp_path):
                       "mission.toml:4: planner.stall_fraction: expected from 0 to 0.5")
     with pytest.raises(Exception, match="stall fraction"):
         PlannerSettings(stall=StallRule(fraction=-0.1))
+
+
+def test_refly_of_a_run_folder_from_before_the_rule_searches_its_fixed_budget(tmp_path):
+    run = tmp_path / "run"
+    assert run_here("fly", "forest", "--seed", "3", "--no-figures", "--quiet", "--stall", "0",
+                    "-o", run).returncode == 0
+    flown = json.loads((run / "metrics.json").read_text())
+    assert flown["search_stopped_by"] == "improvement"
+    text = (run / "mission.toml").read_text()
+    assert "stall = 0\n" in text
+    # as fly wrote it before the stall rule: the planner's keys without the rule's
+    (run / "mission.toml").write_text("".join(line for line in text.splitlines(keepends=True)
+                                              if not line.startswith("stall")))
+    assert run_here("refly", run, "--no-figures", "-o", tmp_path / "again").returncode == 0
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    assert again["search_stopped_by"] == "improvement"
+    assert again["path_length_m"] == flown["path_length_m"]

@@ -345,6 +345,18 @@ def read_mission(path: str | Path) -> MissionConfig:
     return _validated(table, path.parent, source)
 
 
+def read_run_mission(path: str | Path) -> MissionConfig:
+    """The mission a run folder keeps in ``path`` (:func:`read_mission`), as it flew: one
+    written before the stall rule (its ``[planner]`` names ``improve`` but no ``stall``, as
+    every run folder's names all its keys) searched for its whole ``improve`` budget, so it
+    flies again with ``stall = 0``."""
+    config = read_mission(path)
+    given = config.planner.model_fields_set
+    if "improve" in given and "stall" not in given:
+        return config.with_changes({"planner.stall": 0})
+    return config
+
+
 def _validated(table: dict[str, Any], folder: str | Path | None,
                source: Source) -> MissionConfig:
     try:
