@@ -178,9 +178,9 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
              else "until the time or iteration budget ends")
     parser.add_argument("--improve", type=samples, default=default(improve), metavar="N",
                         help="once a first path is found, improve it for N more samples, "
-                             f"at most {PLAN_ITERATIONS.high:,}, then stop (rrtstar; the same "
-                             "seed then gives the same path however fast the machine; "
-                             f"default: {until})")
+                             f"at most {PLAN_ITERATIONS.high:,}, then stop, unless --stall "
+                             "stops it sooner (rrtstar; the same seed then gives the same "
+                             f"path however fast the machine; default: {until})")
     parser.add_argument("--stall", type=samples, default=default(DEFAULT_STALL_SAMPLES),
                         metavar="N",
                         help="once a first path is found, stop when the best length has "
