@@ -12,9 +12,9 @@ mission, the wall time, the success rate and the plans made.
 
 The missions: the built-in worlds ``forest`` and ``window`` alternately, each with its own
 start and goal, seeds 0, 1, 2, ... (half the missions each), at 2 m/s with 3 m/s^2 and
-``fly``'s search budget (50,000 samples of improvement after the first path; ``--improve``
-sets another, for both) with a 60 s time cap, the default vehicle and gains. Each repeat
-runs, in this order:
+``fly``'s search budget (the stall rule, with at most 50,000 samples of improvement after
+the first path; ``--improve`` sets another ceiling, for both) with a 60 s time cap, the
+default vehicle and gains. Each repeat runs, in this order:
 
 * ``quadnav batch SPEC --workers W --quiet -o DIR`` (a fresh DIR): one process that spawns
   W workers, each loading the compiled kernels once;

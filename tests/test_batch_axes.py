@@ -190,6 +190,11 @@ def test_a_batch_folder_written_before_the_contender_columns_resumes_and_refies(
     metrics = json.loads((tmp_path / "row2" / "metrics.json").read_text())
     assert metrics["rms_tracking_error_m"] == earlier[1]["rms_tracking_error_m"]
 
+    # it searched before the stall rule: its spec now means another batch, refused ...
+    refused = run_here("batch", spec, "--quiet", "-o", folder)
+    assert_user_error(refused, f"{folder}: holds another batch (its stall differs)")
+    # ... and, with the fixed budget it flew with, the same one
+    spec.write_text(spec.read_text() + "stall = 0\n")
     result = run_here("batch", spec, "--quiet", "-o", folder)
 
     assert result.returncode == 0, result.stderr

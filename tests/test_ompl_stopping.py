@@ -1,6 +1,7 @@
 """OMPL's planners stop by quadnav's rule: a planner that counts its iterations stops the
 given number of them after its first solution, as RRT* stops after its samples, instead of
-spending the whole time budget; PRM*, which counts none, stops at the time limit."""
+spending the whole time budget, or by the stall rule; PRM*, which counts none, stops at the
+time limit."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import pytest
 
 pytest.importorskip("ompl", reason="the optional OMPL wheel is not installed (pip install ompl)")
 
-from quadnav.planning import PlannerSettings, make_problem
+from quadnav.planning import PlannerSettings, StallRule, make_problem
 from quadnav.planning.ompl_planners import plan_ompl
 from quadnav.world import load_world
 
@@ -42,3 +43,16 @@ def test_prm_star_counts_no_iterations_and_stops_at_the_time_limit(forest):
     result = plan_ompl(forest, PlannerSettings(time_limit=0.3, improve_iterations=IMPROVE,
                                                seed=3), "PRMstar")
     assert result.stats.stopped_by == "time"
+
+
+@pytest.mark.parametrize("name", ["RRTstar", "BITstar"])
+def test_a_planner_that_counts_iterations_stops_by_the_stall_rule(forest, name):
+    # a rule that any search meets at its first comparison: at most 50 % shorter over
+    # the IMPROVE iterations after the first solution
+    rule = StallRule(fraction=0.5, samples=IMPROVE)
+    fixed = PlannerSettings(time_limit=GENEROUS, improve_iterations=10 * IMPROVE, seed=3)
+    stalled = plan_ompl(forest, fixed.replace(stall=rule), name)
+    full = plan_ompl(forest, fixed, name)
+    assert stalled.solved and stalled.stats.stopped_by == "stall"
+    assert full.stats.stopped_by == "improvement"
+    assert stalled.stats.iterations < full.stats.iterations

@@ -96,7 +96,7 @@ def test_the_default_flight_budget_solves_a_big_maze():
     problem = make_problem(world, None, None, 0.2)
     result = plan(problem, MissionSettings().planning)
     assert result.solved, result.message
-    assert result.stats.stopped_by == "improvement"
+    assert result.stats.stopped_by == "stall"  # a sample rule, not the clock
     again = plan(problem, MissionSettings().planning)
     assert (again.path == result.path).all()  # bound by samples: the same seed, the same path
 

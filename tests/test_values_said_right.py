@@ -93,8 +93,8 @@ def test_a_fifo_named_as_an_input_is_refused_as_what_it_is(tmp_path, args, expec
 def test_a_flight_and_a_plan_record_what_stopped_their_search(tmp_path):
     """A search ended by --time differs from run to run; the run folder says it was the
     clock (and a sample budget says so too)."""
-    by_clock = run_here("fly", "forest", "--time", "0.3", "--improve", "5000000",
-                        "--no-figures", "--quiet", "-o", tmp_path / "clock")
+    by_clock = run_here("fly", "forest", "--time", "0.3", "--improve", "5000000", "--stall",
+                        "0", "--no-figures", "--quiet", "-o", tmp_path / "clock")
     by_budget = run_here("plan", "forest", "--improve", "200", "--no-figures", "--quiet",
                          "-o", tmp_path / "budget")
     assert by_clock.returncode == 0 and by_budget.returncode == 0, by_clock.stderr

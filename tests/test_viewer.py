@@ -48,9 +48,11 @@ READOUT = re.compile(r"t = ([\d.]+) s\s+position \(([-\d.]+), ([-\d.]+), ([-\d.]
 
 @pytest.fixture(scope="module")
 def flown(tmp_path_factory):
-    """A run folder of a successful flight, written with ``--html``, and the fly result."""
+    """A run folder of a successful flight, written with ``--html``, and the fly result;
+    searched for the fixed budget (``--stall 0``), whose tree is large enough to thin."""
     folder = tmp_path_factory.mktemp("flown")
-    result = run_here("fly", SMALL, "-o", folder, "--quiet", "--no-figures", "--html")
+    result = run_here("fly", SMALL, "--stall", "0", "-o", folder, "--quiet", "--no-figures",
+                      "--html")
     assert result.returncode == 0, result.stderr
     return folder, result
 

@@ -101,6 +101,10 @@ PLAN_ITERATIONS = Range(1, 5_000_000, whole=True)
 #: Samples of a search's budget (--iterations, --improve): 0 (for --iterations: no cap
 #: of its own) or a number.
 SAMPLES = Range(0, PLAN_ITERATIONS.high, whole=True)
+#: The stretch of a search's stall rule, samples (quadnav.planning.stall).
+STALL_SAMPLES = Range(1, PLAN_ITERATIONS.high, whole=True)
+#: The fraction of its best length by which a search must shorten over that stretch.
+STALL_FRACTION = Range(0.0, 0.5)
 #: Extensions of a kinodynamic search.
 KINO_ITERATIONS = Range(1, 1_000_000, whole=True)
 #: Random seeds.

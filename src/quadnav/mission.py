@@ -35,6 +35,7 @@ from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import path_length
+from quadnav.planning.stall import StallRule
 from quadnav.plugins import parse_spec
 from quadnav.sim.envelope import flyable_trajectory
 from quadnav.sim.flight import Ending, Flight
@@ -64,15 +65,17 @@ from quadnav.world.model import World
 #: stage's defaults, the same for ``fly``, ``traj`` and the library.
 DEFAULT_SPEED = DEFAULT_V_MAX
 DEFAULT_ACCELERATION = DEFAULT_A_MAX
-#: Search budget of a mission: samples of improvement after the first path, and a
-#: wall-time cap in seconds on the whole search. The first path takes as many samples as
-#: it needs, so the same seed flies the same flight unless the time cap ends the search.
+#: Search budget of a mission: the stall rule (:mod:`quadnav.planning.stall`), at most this
+#: many samples of improvement after the first path, and a wall-time cap in seconds on the
+#: whole search. The first path takes as many samples as it needs, so the same seed flies
+#: the same flight unless the time cap ends the search.
 DEFAULT_IMPROVE = 50_000
 DEFAULT_TIME_CAP = 10.0
 
 
 def _default_planner() -> PlannerSettings:
-    return PlannerSettings(improve_iterations=DEFAULT_IMPROVE, time_limit=DEFAULT_TIME_CAP)
+    return PlannerSettings(improve_iterations=DEFAULT_IMPROVE, stall=StallRule(),
+                           time_limit=DEFAULT_TIME_CAP)
 
 
 def _default_trajectory() -> TrajectorySettings:

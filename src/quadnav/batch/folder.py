@@ -7,9 +7,10 @@ table's columns. A re-run into the same folder must be the same batch: it then s
 missions already in the journal; any other batch is refused (or, with ``restart``, the
 folder's batch files are replaced).
 
-A folder written before the simulation had seeds of its own and rows said which plan they
-flew (:data:`~quadnav.batch.table.PREVIOUS_NAMES`), or before that, before controllers,
-methods, references and wind classes were values of the grid
+A folder written before the stall rule is a batch of ``stall = 0`` (each search ran its
+whole ``improve`` budget). A folder written before the simulation had seeds of its own and
+rows said which plan they flew (:data:`~quadnav.batch.table.PREVIOUS_NAMES`), or before
+that, before controllers, methods, references and wind classes were values of the grid
 (:data:`~quadnav.batch.table.EARLIER_NAMES`), is the same batch as the one its spec now
 reads as (:func:`current_record`): it resumes, and its ``batch.json`` and ``results.csv``
 are then rewritten in today's form (:func:`begin`).
@@ -43,6 +44,7 @@ from quadnav.batch.table import (
 from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
+from quadnav.planning.stall import DEFAULT_STALL_FRACTION
 
 BATCH_JSON = "batch.json"
 #: Every file a batch writes into its folder.
@@ -89,12 +91,16 @@ def read_record(folder: Path) -> dict[str, Any]:
 
 
 def current_record(record: dict[str, Any]) -> dict[str, Any]:
-    """``record`` as written today: one written before the simulation had seeds of its own
-    (its columns :data:`PREVIOUS_NAMES`) is today's with today's columns, its seeds seeding
-    both; one written before controllers, methods, references and wind classes were values
-    of the grid (its columns :data:`EARLIER_NAMES`) had one ``method``, flew the default
-    controller with no reference, and kept the gains of that controller alone; any other
-    record as it is."""
+    """``record`` as written today: one written before the stall rule (no ``stall`` in its
+    spec) searched for its whole ``improve`` budget, ``stall = 0``; one written before the
+    simulation had seeds of its own (its columns :data:`PREVIOUS_NAMES`) is today's with
+    today's columns, its seeds seeding both; one written before controllers, methods,
+    references and wind classes were values of the grid (its columns :data:`EARLIER_NAMES`)
+    had one ``method``, flew the default controller with no reference, and kept the gains of
+    that controller alone; any other record as it is."""
+    if "stall" not in record["spec"]:
+        record = record | {"spec": record["spec"] | {"stall": 0, "stall_fraction":
+                                                     DEFAULT_STALL_FRACTION}}
     if record.get("columns") == list(PREVIOUS_NAMES):
         return record | {"columns": list(NAMES)}
     if record.get("columns") != list(EARLIER_NAMES):

@@ -58,6 +58,7 @@ from quadnav.limits import (
     SETTLE,
     SPEED,
     SPREAD,
+    STALL_FRACTION,
     Range,
     Speed,
     format_number,
@@ -67,6 +68,7 @@ from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
 from quadnav.missionconfig import SPREAD_PARTS, Spread
 from quadnav.missionconfig.checks import located
 from quadnav.planning import get_planner
+from quadnav.planning.stall import DEFAULT_STALL_FRACTION, DEFAULT_STALL_SAMPLES
 from quadnav.plugins import PluginError
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import wind_maker
@@ -77,8 +79,9 @@ from quadnav.world import read_start_goal
 from quadnav.world.builtin import is_builtin_spec
 from quadnav.world.courses import MAP, is_course_name, read_course_file
 
-#: Wall-time cap of one mission's search, s: high enough that the sample budget
-#: (``improve``) ends every search in practice, so a mission's row depends on its seed alone.
+#: Wall-time cap of one mission's search, s: high enough that the sample rules
+#: (``stall``, ``improve``) end every search in practice, so a mission's row depends on
+#: its seed alone.
 DEFAULT_TIME_CAP = 60.0
 #: The most missions one batch may hold.
 MAX_MISSIONS = 1_000_000
@@ -116,7 +119,11 @@ class FixedSettings:
             (``module:NAME`` or ``file.py:NAME``, its file resolved).
         settle: time flown after each trajectory ends, s.
         timing: segment timing (:data:`~quadnav.trajectory.generate.TIMINGS`).
-        improve: samples of improvement after a search's first path.
+        improve: samples of improvement after a search's first path, at most.
+        stall: a search stops once its best length has shortened by at most
+            ``stall_fraction`` over this many samples (:mod:`quadnav.planning.stall`); 0:
+            no such rule, a fixed budget.
+        stall_fraction: that fraction of the best length.
         time_cap: wall-time cap of a search, s.
         physics_rate: RK4 steps per second, Hz.
         control_rate: controller updates per second, Hz.
@@ -128,6 +135,8 @@ class FixedSettings:
     settle: float = SimSettings.settle_time
     timing: str = "fastest"
     improve: int = DEFAULT_IMPROVE
+    stall: int = DEFAULT_STALL_SAMPLES
+    stall_fraction: float = DEFAULT_STALL_FRACTION
     time_cap: float = DEFAULT_TIME_CAP
     physics_rate: float = SimSettings.physics_rate
     control_rate: float = SimSettings.control_rate
@@ -627,7 +636,8 @@ def _fixed(table: dict, folder: Path, src: _Source) -> FixedSettings:
     """The fixed settings of ``table``, defaults for those it leaves out."""
     base = FixedSettings()
     checks = {"accel": ACCELERATION, "margin": MARGIN, "settle": SETTLE,
-              "improve": SAMPLES, "time_cap": PLAN_TIME,
+              "improve": SAMPLES, "stall": SAMPLES, "stall_fraction": STALL_FRACTION,
+              "time_cap": PLAN_TIME,
               "physics_rate": RATE, "control_rate": RATE}
     values = {key: _number(table[key], allowed, key, src)
               for key, allowed in checks.items() if key in table}

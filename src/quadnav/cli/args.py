@@ -20,12 +20,19 @@ from quadnav.limits import (
     SAMPLES,
     SEED,
     SPEED,
+    STALL_FRACTION,
     TIME_SCALE,
     Range,
     Speed,
     speed_value,
 )
 from quadnav.planning import PlannerSettings, planner_names
+from quadnav.planning.stall import (
+    CHECKS,
+    DEFAULT_STALL_FRACTION,
+    DEFAULT_STALL_SAMPLES,
+    stall_rule,
+)
 from quadnav.world import World
 from quadnav.world.builtin import DEFAULT_MARGIN, DEFAULT_WORLD_SPEC
 from quadnav.world.startgoal import query_ends
@@ -64,6 +71,7 @@ coordinate = number_in(COORDINATE)
 margin_value = number_in(MARGIN)
 seed_value = number_in(SEED)
 samples = number_in(SAMPLES)
+stall_fraction = number_in(STALL_FRACTION)
 plan_time = number_in(PLAN_TIME)
 length = number_in(LENGTH)
 speed = number_in(SPEED)
@@ -146,9 +154,10 @@ def resolve_start_goal(args: argparse.Namespace, world: World
 def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iterations: int,
                           improve: int | None, unset: bool = False) -> None:
     """--planner NAME, --time S, --seed N, --iterations N and --improve N with the given
-    defaults (``iterations`` 0: no cap; ``improve`` None: no limit); with ``unset``, the
-    flags not given are left None and the defaults only shown (the command's mission fills
-    them in)."""
+    defaults (``iterations`` 0: no cap; ``improve`` None: no limit), and --stall N and
+    --stall-fraction F with the stall rule's (:mod:`quadnav.planning.stall`); with
+    ``unset``, the flags not given are left None and the defaults only shown (the
+    command's mission fills them in)."""
     def default(value):
         return None if unset else value
 
@@ -169,15 +178,28 @@ def add_planner_arguments(parser: argparse.ArgumentParser, time: float, iteratio
              else "until the time or iteration budget ends")
     parser.add_argument("--improve", type=samples, default=default(improve), metavar="N",
                         help="once a first path is found, improve it for N more samples, "
-                             f"at most {PLAN_ITERATIONS.high:,}, then stop (rrtstar; the same "
-                             "seed then gives the same path however fast the machine; "
-                             f"default: {until})")
+                             f"at most {PLAN_ITERATIONS.high:,}, then stop, unless --stall "
+                             "stops it sooner (rrtstar; the same seed then gives the same "
+                             f"path however fast the machine; default: {until})")
+    parser.add_argument("--stall", type=samples, default=default(DEFAULT_STALL_SAMPLES),
+                        metavar="N",
+                        help="once a first path is found, stop when the best length has "
+                             "shortened by at most --stall-fraction over the last N samples "
+                             f"(checked every N/{CHECKS}; rrtstar and the OMPL planners that "
+                             "count samples; the same seed gives the same path); 0: no such "
+                             "rule, the search runs its whole budget "
+                             f"(default: {DEFAULT_STALL_SAMPLES:,})")
+    parser.add_argument("--stall-fraction", type=stall_fraction,
+                        default=default(DEFAULT_STALL_FRACTION), metavar="F",
+                        help=f"the fraction of --stall, {STALL_FRACTION.describe()} "
+                             f"(default: {DEFAULT_STALL_FRACTION:g}, 0.5 %%)")
 
 
 def planner_budget(args: argparse.Namespace) -> PlannerSettings:
     """The search budget and seed from the flags of :func:`add_planner_arguments`."""
     return PlannerSettings(time_limit=args.time, max_iterations=args.iterations or None,
-                           improve_iterations=args.improve, seed=args.seed)
+                           improve_iterations=args.improve,
+                           stall=stall_rule(args.stall, args.stall_fraction), seed=args.seed)
 
 
 def add_seed_argument(parser: argparse.ArgumentParser, what: str, unset: bool = False) -> None:

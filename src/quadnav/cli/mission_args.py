@@ -25,6 +25,8 @@ MISSION_FLAGS = {
     "time": ("--time", "planner.time"),
     "iterations": ("--iterations", "planner.iterations"),
     "improve": ("--improve", "planner.improve"),
+    "stall": ("--stall", "planner.stall"),
+    "stall_fraction": ("--stall-fraction", "planner.stall_fraction"),
     "method": ("--method", "trajectory.method"),
     "timing": ("--timing", "trajectory.timing"),
     "speed": ("--speed", "trajectory.speed"),

@@ -11,7 +11,7 @@ from quadnav.cli.commands import command_help
 from quadnav.cli.flight_args import add_strict_argument
 from quadnav.cli.fly_command import write_mission
 from quadnav.errors import QuadnavError
-from quadnav.missionconfig import MISSION_FILE, MissionConfig, read_mission
+from quadnav.missionconfig import MISSION_FILE, MissionConfig, read_run_mission
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import REPORT
 
@@ -23,7 +23,7 @@ def refly(args: argparse.Namespace) -> int:
         if not (folder / MISSION_FILE).is_file():
             raise QuadnavError(f"{folder}: no {MISSION_FILE}: expected a run folder of quadnav "
                                "fly or refly, or a batch folder and a mission's KEY|ROW")
-        config = read_mission(folder / MISSION_FILE)
+        config = read_run_mission(folder / MISSION_FILE)
         output = check_output_folder(args.output)
         mission = config.fly()
     else:

@@ -20,7 +20,9 @@ defaults::
     name = "rrtstar"              # a planner's name (ompl:NAME) or a plug-in spec
     time = 10.0                   # s, the search's wall-time cap
     iterations = 0                # samples in all, 0: no cap
-    improve = 50000               # samples after the first path
+    improve = 50000               # samples after the first path, at most
+    stall = 5000                  # stop when the best length shortened by at most
+    stall_fraction = 0.005        # this fraction over this many samples (0: a fixed budget)
     refine = true                 # shortcut and smooth the path
 
     [trajectory]
@@ -66,6 +68,7 @@ from quadnav.missionconfig.config import (
     MissionConfig,
     MissionFiles,
     read_mission,
+    read_run_mission,
     spread_factors,
     spread_plant,
     vehicle_from,
@@ -95,6 +98,7 @@ __all__ = [
     "Spread",
     "Trajectory",
     "read_mission",
+    "read_run_mission",
     "spread_factors",
     "spread_plant",
     "vehicle_from",

@@ -32,6 +32,7 @@ from quadnav.missionconfig.sections import (
 )
 from quadnav.missionconfig.source import Source
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
+from quadnav.planning.stall import stall_rule
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.vehicle.params import (
@@ -184,6 +185,8 @@ class MissionConfig(Section):
                 planning=PlannerSettings(time_limit=self.planner.time,
                                          max_iterations=self.planner.iterations or None,
                                          improve_iterations=self.planner.improve,
+                                         stall=stall_rule(self.planner.stall,
+                                                          self.planner.stall_fraction),
                                          seed=self.seed),
                 refine=self.planner.refine,
                 trajectory=TrajectorySettings(
@@ -342,6 +345,18 @@ def read_mission(path: str | Path) -> MissionConfig:
     table = read_toml(path)
     source = Source(str(path), path.read_text(encoding="utf-8"))
     return _validated(table, path.parent, source)
+
+
+def read_run_mission(path: str | Path) -> MissionConfig:
+    """The mission a run folder keeps in ``path`` (:func:`read_mission`), as it flew: one
+    written before the stall rule (its ``[planner]`` names ``improve`` but no ``stall``, as
+    every run folder's names all its keys) searched for its whole ``improve`` budget, so it
+    flies again with ``stall = 0``."""
+    config = read_mission(path)
+    given = config.planner.model_fields_set
+    if "improve" in given and "stall" not in given:
+        return config.with_changes({"planner.stall": 0})
+    return config
 
 
 def _validated(table: dict[str, Any], folder: str | Path | None,

@@ -19,6 +19,7 @@ from quadnav.limits import (
     SEED,
     SETTLE,
     SPREAD,
+    STALL_FRACTION,
     Speed,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE, DEFAULT_SPEED, DEFAULT_TIME_CAP
@@ -36,6 +37,7 @@ from quadnav.missionconfig.checks import (
     vector,
 )
 from quadnav.planning import get_planner
+from quadnav.planning.stall import DEFAULT_STALL_FRACTION, DEFAULT_STALL_SAMPLES
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import wind_maker
 from quadnav.trajectory.generate import METHODS, TIMINGS
@@ -76,7 +78,11 @@ class Planner(Section):
         name: a planner's name (``rrtstar``, ``ompl:NAME``) or a plug-in spec.
         time: wall-time cap of the search, s.
         iterations: samples in all (0: no cap).
-        improve: samples of improvement after the first path.
+        improve: samples of improvement after the first path, at most.
+        stall: stop once the best length has shortened by at most ``stall_fraction`` over
+            this many samples (:mod:`~quadnav.planning.stall`); 0: no such rule, a fixed
+            budget.
+        stall_fraction: that fraction of the best length.
         refine: shortcut and smooth the path.
     """
 
@@ -84,6 +90,8 @@ class Planner(Section):
     time: Annotated[float, number(PLAN_TIME)] = DEFAULT_TIME_CAP
     iterations: Annotated[int, number(SAMPLES)] = 0
     improve: Annotated[int, number(SAMPLES)] = DEFAULT_IMPROVE
+    stall: Annotated[int, number(SAMPLES)] = DEFAULT_STALL_SAMPLES
+    stall_fraction: Annotated[float, number(STALL_FRACTION)] = DEFAULT_STALL_FRACTION
     refine: Annotated[bool, BeforeValidator(flag)] = True
 
 

@@ -5,6 +5,7 @@
   function (``my_astar.py:astar``, :mod:`quadnav.planning.plain`); a goal in sight of the
   start is joined at once, without a search, but for a plain function, always called.
 * :class:`PlannerSettings` — budget, seed, step, goal bias, ...
+* :class:`StallRule` — stop a search once its best length has stopped improving.
 * :class:`PlanResult` — path (N, 3), explored tree and statistics.
 """
 
@@ -17,6 +18,7 @@ from quadnav.planning.problem import PlanningProblem, make_problem
 from quadnav.planning.registry import Progress, get_planner, planner_names, register_planner
 from quadnav.planning.result import PlanResult, PlanStats, PostStep, path_length
 from quadnav.planning.settings import PlannerSettings
+from quadnav.planning.stall import StallRule
 
 __all__ = [
     "PlainPlanner",
@@ -26,6 +28,7 @@ __all__ = [
     "PlanningProblem",
     "PostStep",
     "Progress",
+    "StallRule",
     "direct_result",
     "get_planner",
     "make_problem",

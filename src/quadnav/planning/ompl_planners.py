@@ -14,19 +14,19 @@ What OMPL 2.0.1's bindings allow, and so what these functions do:
 * **Settings.** ``time_limit``; ``step`` as the range of RRT*, Informed RRT* and RRT-Connect
   (pass ``step = 0.2 * diagonal`` of the inflated boundary for OMPL's own default);
   ``goal_bias`` for RRT* and Informed RRT*; ``rewire_factor`` for RRT*, Informed RRT* and
-  BIT*; ``max_iterations`` and ``improve_iterations`` for RRT*, Informed RRT* and BIT* (the
-  planners that count their iterations: quadnav's RRT* stopping rule; RRT-Connect and PRM*
-  ignore them); ``stop_at_first`` as a cost threshold of
+  BIT*; ``max_iterations``, ``improve_iterations`` and ``stall`` for RRT*, Informed RRT* and
+  BIT* (the planners that count their iterations: quadnav's RRT* stopping rules; RRT-Connect
+  and PRM* ignore them); ``stop_at_first`` as a cost threshold of
   +inf, which any solution meets. ``goal_tolerance`` and ``informed`` are ignored: the goal
   is reached exactly, and the planner's name says whether it samples informed.
 * **Seeds.** OMPL seeds each random generator it creates from one process-wide seed
   generator, which ``RNG.setSeed`` reseeds; everything is built right after it, so the same
   seed draws the same numbers. A search of RRT*, Informed RRT*, BIT* or RRT-Connect is then
   repeatable when it ends at a fixed point — its first solution (``stop_at_first``, and
-  RRT-Connect always) or ``max_iterations`` — before the time limit; a search ended by the
-  clock stops at a different iteration each run. PRM* grows its roadmap while a second
-  thread looks for solutions, so it is not repeatable. OMPL's seeds are nonzero 32-bit
-  numbers: seed ``s`` is passed as ``1 + s mod (2^32 - 1)``.
+  RRT-Connect always), an iteration count or the stall rule — before the time limit; a
+  search ended by the clock stops at a different iteration each run. PRM* grows its
+  roadmap while a second thread looks for solutions, so it is not repeatable. OMPL's seeds
+  are nonzero 32-bit numbers: seed ``s`` is passed as ``1 + s mod (2^32 - 1)``.
 * **Statistics and progress.** The bindings cannot take OMPL's intermediate-solution
   callback. RRT*, Informed RRT*, BIT* and RRT-Connect are given a termination condition
   written in Python, which OMPL evaluates every iteration: it reads the planner's best
@@ -76,6 +76,7 @@ from quadnav.planning.result import (
     path_length,
 )
 from quadnav.planning.settings import PlannerSettings
+from quadnav.planning.stall import StallWatch
 from quadnav.world.blockgrid import grid_point_free, grid_segment_free
 from quadnav.world.model import World
 
@@ -200,37 +201,46 @@ def _solve_polled(planner: ob.Planner, pdef: ob.ProblemDefinition, settings: Pla
                   progress: Progress | None) -> tuple[_History, float, str]:
     """Search under a Python termination condition that OMPL evaluates every iteration:
     the time limit and, for a planner that counts its iterations, quadnav's own sample
-    rule (:meth:`~quadnav.planning.settings.PlannerSettings.limit_after_first`: the cap,
-    and ``improve_iterations`` after the first solution), as RRT* stops.
+    rules, as RRT* stops: the cap and ``improve_iterations`` after the first solution
+    (:meth:`~quadnav.planning.settings.PlannerSettings.limit_after_first`), and the stall
+    rule (:mod:`~quadnav.planning.stall`), checked at the iteration counts it names.
 
     Returns the improvements of the planner's best cost, the search's wall time, s, and
-    what stopped it (``"time"``, ``"iterations"`` or ``"improvement"``).
+    what stopped it (``"time"``, ``"iterations"``, ``"improvement"`` or ``"stall"``).
     """
     best_cost = getattr(planner, "bestCost", None)
     iterations = getattr(planner, "numIterations", None)
     cap = settings.max_iterations or math.inf
     limit = cap if iterations is not None else math.inf
     history: _History = []
+    watch: StallWatch | None = None
+    stalled = False
     next_report = PROGRESS_PERIOD
     clock = time.perf_counter()
 
     def done() -> bool:
-        nonlocal next_report, limit
+        nonlocal next_report, limit, watch, stalled
         elapsed = time.perf_counter() - clock
         if best_cost is not None:
             cost = best_cost().value()
             if cost < (history[-1][1] if history else math.inf):
                 if not history and iterations is not None:
                     limit = settings.limit_after_first(iterations())
+                    if settings.stall is not None:
+                        watch = StallWatch(settings.stall, iterations(), cost)
                 history.append((elapsed, cost))
+            if watch is not None and iterations() >= watch.next_check:
+                stalled = watch.stalled(cost)
         if elapsed >= next_report:
             next_report = elapsed + PROGRESS_PERIOD
             _report(progress, elapsed, settings, history)
-        return elapsed >= settings.time_limit or (
+        return stalled or elapsed >= settings.time_limit or (
             iterations is not None and iterations() >= limit)
 
     planner.solve(ob.PlannerTerminationCondition(done))
     seconds = time.perf_counter() - clock
+    if stalled:
+        return history, seconds, "stall"
     if iterations is None or iterations() < limit:
         return history, seconds, "time"
     return history, seconds, "iterations" if iterations() >= cap else "improvement"

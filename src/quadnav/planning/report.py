@@ -9,8 +9,9 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.limits import PLAN_ITERATIONS
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.result import PlanResult
+from quadnav.planning.result import PlanResult, PlanStats
 from quadnav.planning.settings import PlannerSettings
 
 
@@ -54,6 +55,9 @@ def plan_summary(problem: PlanningProblem, result: PlanResult, settings: Planner
         "settings": {
             "time_limit": settings.time_limit,
             "max_iterations": settings.max_iterations,
+            "improve_iterations": settings.improve_iterations,
+            "stall": None if settings.stall is None else {
+                "fraction": settings.stall.fraction, "samples": settings.stall.samples},
             "stop_at_first": settings.stop_at_first,
             "step": settings.step_for(world),
             "goal_bias": settings.goal_bias,
@@ -64,6 +68,7 @@ def plan_summary(problem: PlanningProblem, result: PlanResult, settings: Planner
         "stats": {
             "iterations": stats.iterations,
             "stopped_by": stats.stopped_by,
+            "stop_reason": stop_reason(stats, settings),
             "nodes": stats.nodes,
             "seconds": stats.seconds,
             "time_to_first": stats.time_to_first,
@@ -74,3 +79,23 @@ def plan_summary(problem: PlanningProblem, result: PlanResult, settings: Planner
         },
         "straight_line": float(np.linalg.norm(problem.goal - problem.start)),
     }
+
+
+def stop_reason(stats: PlanStats, settings: PlannerSettings) -> str | None:
+    """What ended a search under ``settings`` that went as ``stats`` said, in words (from
+    its ``stopped_by``); None when the planner does not say."""
+    stopped_by = stats.stopped_by
+    capped = stats.iterations == (settings.max_iterations or PLAN_ITERATIONS.high)
+    if stopped_by == "stall" and settings.stall is not None:
+        return settings.stall.describe()
+    if stopped_by == "improvement" and settings.stop_at_first:
+        return "the first path (stop at first)"
+    if stopped_by == "improvement" and settings.improve_iterations is not None and not capped:
+        return f"the {settings.improve_iterations:,} samples allowed after the first path"
+    if stopped_by in ("improvement", "iterations"):
+        return f"the cap of {settings.max_iterations or PLAN_ITERATIONS.high:,} samples"
+    if stopped_by == "time":
+        return f"the time budget of {settings.time_limit:g} s"
+    if stopped_by == "direct":
+        return "the goal is in sight of the start: joined directly, no search"
+    return None

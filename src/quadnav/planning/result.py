@@ -80,8 +80,9 @@ class PlanStats:
         post: post-processing steps applied after the search, in order.
         stopped_by: what ended the search: ``"iterations"`` (the sample cap),
             ``"improvement"`` (the samples allowed after the first solution),
-            ``"time"`` (the time budget), ``"direct"`` (the goal was in sight of the
-            start), or ``None`` when the planner does not say.
+            ``"stall"`` (the best length stopped improving:
+            :mod:`~quadnav.planning.stall`), ``"time"`` (the time budget), ``"direct"``
+            (the goal was in sight of the start), or ``None`` when the planner does not say.
         setup_seconds: wall time of the set-up before the search's clock started, s
             (spatial indexes, the planner's arrays or objects; 0 when not measured).
     """

@@ -1,8 +1,9 @@
 """RRT* over the inflated world: :func:`plan_rrtstar`.
 
 The iterations run in numba (:mod:`quadnav.planning.rrtstar_kernel`) in chunks; between
-chunks this driver checks the wall clock, grows the arrays, records improvements and
-reports progress. Chunks start small and double while they take under
+chunks this driver checks the wall clock, grows the arrays, records improvements,
+applies the stall rule (:mod:`quadnav.planning.stall`; a chunk ends at each of its checks)
+and reports progress. Chunks start small and double while they take under
 :data:`CHUNK_SECONDS`, so the time to the first solution is measured to within a chunk
 of a few iterations and the time budget is kept to within a few milliseconds. The arrays
 grow only when full, so the search does not depend on where the chunks end: the same seed
@@ -34,6 +35,7 @@ from quadnav.planning.rrtstar_kernel import (
     start_tree,
 )
 from quadnav.planning.settings import PlannerSettings
+from quadnav.planning.stall import StallWatch
 from quadnav.world.model import World
 
 #: Name of this planner in results and on the command line.
@@ -140,6 +142,7 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
     cap = settings.max_iterations or PLAN_ITERATIONS.high  # also bounds the tree's memory
     limit = cap
     stopped_by = None
+    watch: StallWatch | None = None
     query = Query(start, goal, tuning, rotation, grid, origin, extent)
     tree = empty_tree(min(_INITIAL_CAPACITY, limit + 1))
     counts, best = tree.counts, tree.best
@@ -153,12 +156,18 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
         now = time.perf_counter() - clock
         if best[BEST_VERTEX] >= 0 and (not history or best[BEST_COST] < history[-1][1]):
             if not history:  # the kernel returns at the first solution: this count is exact
-                limit = min(limit, settings.limit_after_first(int(counts[ITERATIONS])))
+                first = int(counts[ITERATIONS])
+                limit = min(limit, settings.limit_after_first(first))
+                if settings.stall is not None:
+                    watch = StallWatch(settings.stall, first, float(best[BEST_COST]))
             history.append((now, float(best[BEST_COST])))
             time_to_first = history[0][0]
         if progress is not None:
             progress(min(now / settings.time_limit, 1.0), float(best[BEST_COST]))
-        if counts[ITERATIONS] >= limit:
+        if (watch is not None and counts[ITERATIONS] == watch.next_check
+                and watch.stalled(float(best[BEST_COST]))):
+            stopped_by = "stall"
+        elif counts[ITERATIONS] >= limit:
             capped = limit == cap and time_to_first is None
             stopped_by = "iterations" if capped else "improvement"
         elif now >= settings.time_limit:
@@ -171,7 +180,10 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
             tree = grown_tree(tree, 2 * len(tree.cost), origin, extent)
         # An iteration adds at most one vertex: a chunk never outgrows the arrays, so they
         # grow (and the node grid is rebuilt) at the same iteration however long chunks take.
-        chunk = int(min(chunk, limit - counts[ITERATIONS], len(tree.cost) - counts[NODES]))
+        # A chunk also ends at the stall rule's next check, so each check sees the sample
+        # count it names.
+        end = limit if watch is None else min(limit, watch.next_check)
+        chunk = int(min(chunk, end - counts[ITERATIONS], len(tree.cost) - counts[NODES]))
         began = time.perf_counter()
         grow(rng, chunk, bool(best[BEST_VERTEX] < 0), query, tree)
         if time.perf_counter() - began < CHUNK_SECONDS:

@@ -13,6 +13,7 @@ import numpy as np
 
 from quadnav.errors import QuadnavError
 from quadnav.limits import LENGTH, PLAN_ITERATIONS, PLAN_TIME, SEED, Range
+from quadnav.planning.stall import StallRule
 from quadnav.world.model import World
 
 #: Default wall-time budget of a search, s.
@@ -37,7 +38,12 @@ class PlannerSettings:
         improve_iterations: once a first solution is found, stop after this many more
             samples (``None``: no such limit). With no ``max_iterations``, the search then
             takes as long as a first solution needs (within ``time_limit``) and is still
-            repeatable: the same seed gives the same path. RRT* only.
+            repeatable: the same seed gives the same path.
+        stall: once a first solution is found, stop when the best length has stopped
+            improving by this rule (:mod:`~quadnav.planning.stall`; ``None``: no such
+            rule, the search runs its whole budget). Binds by samples, as
+            ``improve_iterations`` does, which stays the ceiling. RRT* and OMPL's planners
+            that count iterations.
         seed: seed of every random choice; the same seed gives the same result.
         stop_at_first: return as soon as a first solution is found.
         step: largest edge a tree grows by in one iteration, metres (``None``: scaled to
@@ -54,6 +60,7 @@ class PlannerSettings:
     time_limit: float = DEFAULT_TIME_LIMIT
     max_iterations: int | None = None
     improve_iterations: int | None = None
+    stall: StallRule | None = None
     seed: int = 0
     stop_at_first: bool = False
     step: float | None = None
