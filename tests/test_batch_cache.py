@@ -244,8 +244,11 @@ def test_a_batch_folder_written_before_the_simulation_seeds_resumes(tmp_path):
     shutil.copytree(PREVIOUS_BATCH, folder)
     previous = read_rows(folder / "results.csv")
     assert json.loads((folder / "batch.json").read_text())["columns"] == list(PREVIOUS_NAMES)
+    # and before the stall rule: its searches ran their whole improve budget
+    spec = folder / "spec.toml"
+    spec.write_text(spec.read_text() + "stall = 0\n")
 
-    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder)
+    result = run_here("batch", spec, "--quiet", "-o", folder)
 
     assert result.returncode == 0, result.stderr
     assert f"3 missions, 2 already in {folder}; flying 1 on" in result.stdout
