@@ -45,8 +45,7 @@ from quadnav.hardware.geofence import Geofence
 from quadnav.hardware.lost_link import HOLD, LostLinkBound, run_length, safe_speed
 from quadnav.hardware.netns import NetNamespace
 from quadnav.hardware.rc import stick_velocity
-from quadnav.hardware.stop_signals import StopSignals, signal_name
-from quadnav.signals import Stopped
+from quadnav.signals import Stopped, StopSignalHandler, signal_name
 from quadnav.world import World
 
 #: One worker flies this module's shared flights (each once, not once per worker).
@@ -112,7 +111,7 @@ def test_rc_mode_refuses_a_plan_no_safe_stick_can_follow(course, tmp_path):
                                                (signal.SIGTERM, Stopped)])
 def test_the_first_stop_signal_raises_and_later_ones_wait(first, raised):
     before = [signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)]
-    with StopSignals() as signals:
+    with StopSignalHandler(hold_after_first=True) as signals:
         with pytest.raises(raised) as caught:
             signal.raise_signal(first)
             time.sleep(5)  # the handler raises long before

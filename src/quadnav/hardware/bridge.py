@@ -32,7 +32,7 @@ signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop`` (hover) and th
 ``land``, resent up to three times; a landing counts as confirmed by
 its ``ok`` or by a state packet with the drone on the floor
 (:mod:`quadnav.hardware.landing`). Once the landing has begun, further stop signals are
-held until it is over (:mod:`quadnav.hardware.stop_signals`). **Landing by itself**: the
+held until it is over (:class:`~quadnav.signals.StopSignalHandler`). **Landing by itself**: the
 reply ``error Auto land``, or a battery below :data:`~quadnav.hardware.sdk.LOW_BATTERY`
 percent in flight, means the Tello lands (or is about to) by itself: the bridge sends
 ``land`` once and waits for the state packets to show it on the floor. A landing that is
@@ -87,10 +87,9 @@ from quadnav.hardware.lost_link import (
 from quadnav.hardware.moves import MoveError, go_speed
 from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
 from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
-from quadnav.hardware.stop_signals import StopSignals, signal_name
 from quadnav.hardware.tello_log import LOG_NAME, TelloLog, open_log
 from quadnav.hardware.truth import flight_truth
-from quadnav.signals import signal_of
+from quadnav.signals import StopSignalHandler, signal_name, signal_of
 from quadnav.sim.settings import SimSettings
 from quadnav.world.placement import format_point
 
@@ -204,7 +203,7 @@ class _Flight:
 
     def __init__(self, plan: FlightPlan, link: Link, estimator: DeadReckoning,
                  settings: BridgeSettings, clock: Clock, log: TelloLog,
-                 slowed: SlowedFlight | None, signals: StopSignals) -> None:
+                 slowed: SlowedFlight | None, signals: StopSignalHandler) -> None:
         self.plan, self.link, self.estimator = plan, link, estimator
         self.settings, self.clock, self.log = settings, clock, log
         self.slowed, self.signals = slowed, signals
@@ -436,6 +435,17 @@ def landed(plan: FlightPlan, done: str, place: Estimate) -> Outcome:
                    f"{LANDING_TOLERANCE:g} m tolerance, after {done}", landing=place)
 
 
+def _flight_signals() -> StopSignalHandler:
+    """Stop-signal handling for one flight (install it with ``with``): the first stop
+    signal raises where the program is (KeyboardInterrupt, or
+    :class:`~quadnav.signals.Stopped`), so the bridge stops the drone and lands it; from
+    then on, and from :meth:`~quadnav.signals.StopSignalHandler.hold` on, which the
+    bridge calls before it lands, every further one is only noted: a second Ctrl-C, or a
+    service manager's SIGTERM after SIGHUP, must not abort the landing. SIGKILL, which
+    cannot be caught, still ends the program."""
+    return StopSignalHandler(hold_after_first=True)
+
+
 def stopped_by(signum: int) -> str:
     """``stopped by SIGTERM``, ``interrupted by Ctrl-C (SIGINT)``."""
     verb = "interrupted" if signum == signal.SIGINT else "stopped"
@@ -490,7 +500,7 @@ def rc_pace(plan: FlightPlan, settings: BridgeSettings) -> SlowedFlight:
             "waypoints)")
     log = TelloLog(io.StringIO())
     rehearsal = _Flight(plan, DryRunLink(log, io.StringIO()), DeadReckoning(plan.frame),
-                        settings, VirtualClock(), log, slowed, StopSignals())
+                        settings, VirtualClock(), log, slowed, _flight_signals())
     rehearsal._follow()
     miss, where = rehearsal.rc_end
     if miss > RC_REACH:
@@ -568,7 +578,7 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
                       f"{format_point(slowed.where)}")
         link = DryRunLink(log, stream) if dry_run else _tello_link(host, log, estimator,
                                                                    settings)
-        with StopSignals() as signals:
+        with _flight_signals() as signals:
             try:
                 outcome = _Flight(plan, link, estimator, settings, clock, log, slowed,
                                   signals).run()
