@@ -1,5 +1,6 @@
-"""The stages import only the stages before them: import-linter's layers contract in
-pyproject.toml holds for the package, and breaks for a copy with one import turned round."""
+"""The stages import only the stages before them, and the Tello bridge and emulator not
+each other: import-linter's contracts in pyproject.toml hold for the package, and break
+for a copy with one import turned round."""
 
 from __future__ import annotations
 
@@ -28,15 +29,28 @@ def _lint_imports(source: Path, cwd: Path) -> subprocess.CompletedProcess:
 def test_the_stage_order_holds():
     result = _lint_imports(ROOT / "src", ROOT)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "1 kept, 0 broken" in result.stdout
+    assert "2 kept, 0 broken" in result.stdout
 
 
-def test_an_earlier_stage_importing_a_later_one_breaks_the_contract(tmp_path):
+def _lint_imports_with(tmp_path: Path, module: str, line: str) -> subprocess.CompletedProcess:
+    """``lint-imports`` on a copy of the package in which ``module`` (a path below
+    ``quadnav/``) ends with the import ``line``."""
     shutil.copytree(PACKAGE, tmp_path / "src" / "quadnav",
                     ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path)
-    world = tmp_path / "src" / "quadnav" / "world" / "model.py"
-    world.write_text(world.read_text() + "\nfrom quadnav.viz import figures  # noqa\n")
-    result = _lint_imports(tmp_path / "src", tmp_path)
+    changed = tmp_path / "src" / "quadnav" / module
+    changed.write_text(changed.read_text() + f"\n{line}  # noqa\n")
+    return _lint_imports(tmp_path / "src", tmp_path)
+
+
+def test_an_earlier_stage_importing_a_later_one_breaks_the_contract(tmp_path):
+    result = _lint_imports_with(tmp_path, "world/model.py", "from quadnav.viz import figures")
     assert result.returncode != 0
     assert "quadnav.world.model -> quadnav.viz.figures" in result.stdout
+
+
+def test_the_bridge_importing_the_emulator_breaks_the_contract(tmp_path):
+    result = _lint_imports_with(tmp_path, "hardware/bridge/landing.py",
+                                "from quadnav.hardware.emulator import drone")
+    assert result.returncode != 0
+    assert "quadnav.hardware.bridge.landing -> quadnav.hardware.emulator.drone" in result.stdout

@@ -19,7 +19,7 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.errors import PlanningWarning, QuadnavError
-from quadnav.hardware.flight_plan import plan_flight
+from quadnav.hardware.bridge.flight_plan import plan_flight
 from quadnav.kinodynamic import KinoSettings
 from quadnav.kinodynamic.quadrotor import plan_quadrotor
 from quadnav.mission import MissionSettings, fly_mission, warn_if_margin_too_small

@@ -1,7 +1,7 @@
 """What each fault leads to when the bridge flies a Tello: the drone is brought down inside
 the geofence, and the message and the exit code say what happened.
 
-Faults are injected into the emulator (:class:`~quadnav.hardware.emulator.Faults`) under the
+Faults are injected into the emulator (:class:`~quadnav.hardware.emulator.server.Faults`) under the
 real djitellopy client (see :mod:`tellotools`); stop signals go to a real ``quadnav tello
 fly`` process, or (for the handler itself) to this one.
 """
@@ -32,7 +32,7 @@ from tellotools import (
 )
 
 from quadnav.cli.tello_fly_command import exit_code
-from quadnav.hardware.bridge import (
+from quadnav.hardware.bridge.flight import (
     LANDING_TOLERANCE,
     BridgeSettings,
     RcModeError,
@@ -40,11 +40,11 @@ from quadnav.hardware.bridge import (
     fly,
     rc_pace,
 )
-from quadnav.hardware.emulator import Faults, TelloEmulator
-from quadnav.hardware.geofence import Geofence
-from quadnav.hardware.lost_link import HOLD, LostLinkBound, run_length, safe_speed
-from quadnav.hardware.netns import NetNamespace
-from quadnav.hardware.rc import stick_velocity
+from quadnav.hardware.bridge.geofence import Geofence
+from quadnav.hardware.bridge.lost_link import HOLD, LostLinkBound, run_length, safe_speed
+from quadnav.hardware.bridge.rc import stick_velocity
+from quadnav.hardware.emulator.netns import NetNamespace
+from quadnav.hardware.emulator.server import Faults, TelloEmulator
 from quadnav.signals import Stopped, StopSignalHandler, signal_name
 from quadnav.world import World
 
@@ -131,7 +131,7 @@ def test_the_first_stop_signal_raises_and_later_ones_wait(first, raised):
     (Status.INTERRUPTED, signal.SIGINT, 130), (Status.INTERRUPTED, signal.SIGTERM, 143),
     (Status.INTERRUPTED, signal.SIGHUP, 129)])
 def test_exit_codes(status, signum, code):
-    from quadnav.hardware.bridge import Outcome
+    from quadnav.hardware.bridge.flight import Outcome
 
     assert exit_code(Outcome(status, "", signum)) == code
 

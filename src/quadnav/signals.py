@@ -7,7 +7,7 @@ script (:mod:`quadnav.cli.launch`) has installed its handlers. So one ``except
 KeyboardInterrupt`` stops a run cleanly whichever signal came. Every place that handles
 stop signals does so with a :class:`StopSignalHandler`: the console script (which holds
 them while numba compiles), a run folder's move (:mod:`quadnav.runfolder`, which holds
-them while the files move in) and a Tello flight (:mod:`quadnav.hardware.bridge`, which
+them while the files move in) and a Tello flight (:mod:`quadnav.hardware.bridge.flight`, which
 holds them while the drone lands).
 """
 

@@ -1,4 +1,4 @@
-"""Flying a checked :class:`~quadnav.hardware.flight_plan.FlightPlan` on a Tello — or
+"""Flying a checked :class:`~quadnav.hardware.bridge.flight_plan.FlightPlan` on a Tello — or
 printing every command a flight would send.
 
 The sequence: ``command`` and the first state packet; the battery check (below
@@ -10,19 +10,19 @@ refused and nothing flies); ``takeoff``; then
   has answered ``ok``;
 * ``curves`` mode: as ``waypoints`` through the start's and the goal's zones, and between
   them ``curve`` and ``go`` commands that follow the trajectory within a few centimetres
-  (:mod:`quadnav.hardware.curves`), every centimetre of each checked against the fence;
+  (:mod:`quadnav.hardware.bridge.curves`), every centimetre of each checked against the fence;
 * ``rc`` mode: ``rc`` sticks at ``rc_rate`` Hz (drone time) from the trajectory's
   velocity plus a correction towards its position from the dead-reckoned estimate (a
-  dry run's drone flies the sticks exactly; see :mod:`quadnav.hardware.rc`), each
+  dry run's drone flies the sticks exactly; see :mod:`quadnav.hardware.bridge.rc`), each
   bounded so that a link lost right after it cannot carry the drone out of the geofence
   (on a leg out of or into the margin: out of the leg's room; see
-  :mod:`quadnav.hardware.lost_link`; the trajectory is followed more slowly where that
+  :mod:`quadnav.hardware.bridge.lost_link`; the trajectory is followed more slowly where that
   bound bites), until the estimate is within :data:`GOAL_TOLERANCE` of the trajectory's
   end horizontally (the landing is straight down), or :data:`RC_SETTLE` s after it; then
   the sticks are centred;
 
 then ``land``. **Where it landed**: one place, the dead-reckoned estimate when the landing
-was confirmed (:mod:`quadnav.hardware.dead_reckoning`, which also takes in each move's
+was confirmed (:mod:`quadnav.hardware.bridge.dead_reckoning`, which also takes in each move's
 ``ok``), with its 1-sigma uncertainty; a flight flown to its end landed at the goal when
 that place lies within :data:`LANDING_TOLERANCE` of the floor under the goal, else off
 it. **Safe stop**: a reply overdue by more than the link timeout, no state
@@ -31,7 +31,7 @@ packet for that long, a refused command, a dead-reckoned position outside the ge
 signal (Ctrl-C, SIGTERM, SIGHUP) centre the sticks, send ``stop`` (hover) and then
 ``land``, resent up to three times; a landing counts as confirmed by
 its ``ok`` or by a state packet with the drone on the floor
-(:mod:`quadnav.hardware.landing`). Once the landing has begun, further stop signals are
+(:mod:`quadnav.hardware.bridge.landing`). Once the landing has begun, further stop signals are
 held until it is over (:class:`~quadnav.signals.StopSignalHandler`). **Landing by itself**: the
 reply ``error Auto land``, or a battery below :data:`~quadnav.hardware.sdk.LOW_BATTERY`
 percent in flight, means the Tello lands (or is about to) by itself: the bridge sends
@@ -40,7 +40,7 @@ never confirmed is a **lost link**: the outcome says what the drone does if it h
 nothing more (it lands by itself 15 s after the last command it heard).
 
 Time: the drone's seconds are the wall clock's times ``time_scale`` (1 for a real drone;
-the emulator's scale in tests), see :class:`~quadnav.hardware.drone_clock.Clock`; the
+the emulator's scale in tests), see :class:`~quadnav.hardware.bridge.drone_clock.Clock`; the
 link timeout is wall-clock.
 """
 
@@ -61,14 +61,14 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
-from quadnav.hardware.curves import Curve
-from quadnav.hardware.dead_reckoning import DeadReckoning, Estimate
-from quadnav.hardware.drone_clock import Clock, VirtualClock
-from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan
-from quadnav.hardware.frames import to_m
-from quadnav.hardware.geofence import GeofenceError, Region
-from quadnav.hardware.landing import Lander
-from quadnav.hardware.link import (
+from quadnav.hardware.bridge.curves import Curve
+from quadnav.hardware.bridge.dead_reckoning import DeadReckoning, Estimate
+from quadnav.hardware.bridge.drone_clock import Clock, VirtualClock
+from quadnav.hardware.bridge.flight_plan import TAKEOFF_HEIGHT, FlightPlan
+from quadnav.hardware.bridge.frames import to_m
+from quadnav.hardware.bridge.geofence import GeofenceError, Region
+from quadnav.hardware.bridge.landing import Lander
+from quadnav.hardware.bridge.link import (
     LINK_TIMEOUT,
     AutoLandingError,
     CommandRefusedError,
@@ -76,7 +76,7 @@ from quadnav.hardware.link import (
     Link,
     LinkLostError,
 )
-from quadnav.hardware.lost_link import (
+from quadnav.hardware.bridge.lost_link import (
     HOLD,
     LEG_CREEP,
     LostLinkBound,
@@ -84,10 +84,10 @@ from quadnav.hardware.lost_link import (
     run_length,
     slowed_flight,
 )
-from quadnav.hardware.moves import MoveError, go_speed
-from quadnav.hardware.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
+from quadnav.hardware.bridge.moves import MoveError, go_speed
+from quadnav.hardware.bridge.rc import StickRounder, stick_values, stick_velocity, tracking_velocity
+from quadnav.hardware.bridge.tello_log import LOG_NAME, TelloLog, open_log
 from quadnav.hardware.sdk import AUTO_LAND_AFTER, LOW_BATTERY
-from quadnav.hardware.tello_log import LOG_NAME, TelloLog, open_log
 from quadnav.hardware.truth import flight_truth
 from quadnav.signals import StopSignalHandler, signal_name, signal_of
 from quadnav.sim.settings import SimSettings
@@ -469,7 +469,7 @@ def _tello_link(host: str, log: TelloLog, estimator: DeadReckoning,
                 settings: BridgeSettings) -> Link:
     """djitellopy's client for the drone at ``host``; QuadnavError without djitellopy."""
     try:
-        from quadnav.hardware.tello_link import TelloLink
+        from quadnav.hardware.bridge.tello_link import TelloLink
     except ImportError:
         raise QuadnavError("flying a Tello needs djitellopy: pip install 'quadnav[tello]' "
                            "(or use --dry-run)") from None
@@ -538,7 +538,7 @@ def fly(plan: FlightPlan, settings: BridgeSettings, folder: str | Path,
     Args:
         plan: a checked flight plan.
         settings: mode, safety thresholds, rates, time scale.
-        folder: gets :data:`~quadnav.hardware.tello_log.LOG_NAME` and :data:`TRACK_FIGURE`.
+        folder: gets :data:`~quadnav.hardware.bridge.tello_log.LOG_NAME` and :data:`TRACK_FIGURE`.
         host: the drone's IPv4 address; None for a dry run.
         stream: where a dry run prints (default: standard output as it is when called).
         truth: a file that something outside the bridge (the emulator) writes the drone's
@@ -610,7 +610,7 @@ def _draw(plan: FlightPlan, mode: str, track: FloatArray, truth: FloatArray | No
           outcome: Outcome, path: Path) -> None:
     """Save the figure of the flight: planned, dead-reckoned ``track`` (N, 4) and, when
     known, the true track (K, 4)."""
-    from quadnav.hardware.track_figure import track_figure  # matplotlib: only when needed
+    from quadnav.hardware.bridge.track_figure import track_figure  # matplotlib: only when needed
     from quadnav.viz.figures import save_figure
 
     flown = {"dead reckoning (state packets)": track[:, 1:]}

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from quadnav.hardware.dead_reckoning import DeadReckoning, Estimate
-from quadnav.hardware.frames import GROUND_Z
-from quadnav.hardware.link import AutoLandingError, CommandRefusedError, Link, LinkLostError
-from quadnav.hardware.tello_log import TelloLog
+from quadnav.hardware.bridge.dead_reckoning import DeadReckoning, Estimate
+from quadnav.hardware.bridge.frames import GROUND_Z
+from quadnav.hardware.bridge.link import AutoLandingError, CommandRefusedError, Link, LinkLostError
+from quadnav.hardware.bridge.tello_log import TelloLog
 
 #: Drone seconds a landing and a ``stop`` may take before the reply is due.
 LAND_TIME = 10.0

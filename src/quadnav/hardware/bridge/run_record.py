@@ -43,7 +43,8 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.config import as_plain
-from quadnav.hardware.bridge import (
+from quadnav.hardware.bridge.dead_reckoning import Estimate
+from quadnav.hardware.bridge.flight import (
     LANDING_TOLERANCE,
     BridgeSettings,
     Flown,
@@ -51,8 +52,7 @@ from quadnav.hardware.bridge import (
     Status,
     landing_error,
 )
-from quadnav.hardware.dead_reckoning import Estimate
-from quadnav.hardware.flight_plan import FlightPlan
+from quadnav.hardware.bridge.flight_plan import FlightPlan
 from quadnav.planning.result import nearest_on_polyline, path_length
 from quadnav.runs import FlightTable, RunContent, drift
 from quadnav.vehicle import quaternion

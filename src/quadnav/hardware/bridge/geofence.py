@@ -8,7 +8,7 @@ after takeoff or the descent to land — which must still keep the margin from e
 block and the boundary's walls.
 
 A :class:`Region` is any such space with its checks; the :class:`Geofence` is one, and
-the room of a start's or goal's leg (:mod:`quadnav.hardware.leg_room`) is another.
+the room of a start's or goal's leg (:mod:`quadnav.hardware.bridge.leg_room`) is another.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.hardware.frames import GROUND_Z
+from quadnav.hardware.bridge.frames import GROUND_Z
 from quadnav.world.model import Hit, World
 from quadnav.world.placement import format_box, format_point
 

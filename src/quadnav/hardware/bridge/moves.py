@@ -1,7 +1,7 @@
 """Waypoints to the Tello SDK's relative ``go x y z speed`` moves, within the SDK's limits.
 
 A ``go`` move is a whole-centimetre step in the takeoff frame (see
-:mod:`quadnav.hardware.frames`) and a speed in cm/s. The SDK refuses a move with any
+:mod:`quadnav.hardware.bridge.frames`) and a speed in cm/s. The SDK refuses a move with any
 component outside +-:data:`GO_MAX_CM`, a speed outside :data:`SPEED_RANGE`, or all three
 components within +-:data:`GO_MIN_CM` (a move that short is refused, so it is counted
 as too short here). :func:`go_moves` therefore
@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.errors import QuadnavError
-from quadnav.hardware.frames import IntArray
+from quadnav.hardware.bridge.frames import IntArray
 
 #: Largest component of a ``go`` move, cm.
 GO_MAX_CM = 500

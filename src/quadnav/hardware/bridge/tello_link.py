@@ -21,14 +21,14 @@ from collections.abc import Callable
 from djitellopy import Tello
 from djitellopy import tello as djitellopy_module
 
-from quadnav.hardware.link import (
+from quadnav.hardware.bridge.link import (
     LINK_TIMEOUT,
     AutoLandingError,
     CommandRefusedError,
     LinkLostError,
 )
+from quadnav.hardware.bridge.tello_log import TelloLog
 from quadnav.hardware.sdk import AUTO_LAND, MOTION_STOPPED
-from quadnav.hardware.tello_log import TelloLog
 
 #: Wall-clock seconds the drone has to answer ``command`` and to send its first state.
 CONNECT_TIMEOUT = 3.0

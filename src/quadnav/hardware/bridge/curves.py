@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from quadnav.hardware.arc import Arc
-from quadnav.hardware.frames import IntArray
-from quadnav.hardware.moves import Move, MoveError
+from quadnav.hardware.bridge.frames import IntArray
+from quadnav.hardware.bridge.moves import Move, MoveError
 from quadnav.hardware.sdk import SdkError, parse_command
 from quadnav.planning.result import nearest_on_polyline
 

@@ -11,7 +11,7 @@ trajectory's position, capped at the full stick's speed. Rounding to whole perce
 done with error diffusion (:class:`StickRounder`): what one command loses to rounding the
 next one gets, so the sticks' average is the velocity asked for, to within 1 % of
 :data:`RC_FULL_SPEED` over one period — unless the rounded sticks are not allowed (the
-lost-link bound, :mod:`quadnav.hardware.lost_link`), when as few axes as need be are
+lost-link bound, :mod:`quadnav.hardware.bridge.lost_link`), when as few axes as need be are
 rounded towards zero instead (or, failing all, the sticks are centred).
 """
 
@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.hardware.frames import IntArray, body_to_map, map_to_body
+from quadnav.hardware.bridge.frames import IntArray, body_to_map, map_to_body
 
 #: Speed of a full stick (100), m/s (the Tello's default, slow, flight mode).
 RC_FULL_SPEED = 1.0

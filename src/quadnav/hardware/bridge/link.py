@@ -1,6 +1,6 @@
 """What the bridge needs from a link to the drone, its errors, and the dry-run link.
 
-A link (:class:`Link`) is djitellopy's ``Tello`` as :class:`~quadnav.hardware.tello_link.
+A link (:class:`Link`) is djitellopy's ``Tello`` as :class:`~quadnav.hardware.bridge.tello_link.
 TelloLink` extends it — or :class:`DryRunLink`, which prints each command instead of
 sending it and needs no drone (and no djitellopy).
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from typing import Protocol, TextIO
 
-from quadnav.hardware.tello_log import TelloLog
+from quadnav.hardware.bridge.tello_log import TelloLog
 
 #: Seconds without a state packet, or past a reply's time limit, that count as a lost link.
 LINK_TIMEOUT = 1.0

@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body
+from quadnav.hardware.bridge.frames import TakeoffFrame, body_to_map, map_to_body
 from quadnav.world.placement import format_estimate
 
 #: Metres per second of one unit of vgx, vgy, vgz (dm/s), and half of it: how far a

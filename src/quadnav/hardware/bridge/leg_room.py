@@ -28,7 +28,7 @@ from functools import cached_property
 import numpy as np
 
 from quadnav.arrays import FloatArray
-from quadnav.hardware.geofence import Geofence, Region
+from quadnav.hardware.bridge.geofence import Geofence, Region
 from quadnav.planning.legs import BOUNDARY_SLACK, own_clearance
 from quadnav.world.model import Hit, World
 

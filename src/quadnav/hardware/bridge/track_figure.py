@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from matplotlib.figure import Figure
 
 from quadnav.arrays import FloatArray
-from quadnav.hardware.flight_plan import FlightPlan
+from quadnav.hardware.bridge.flight_plan import FlightPlan
 from quadnav.viz.flight_figures import FLOWN_COLOR, SMALL_FONT, TITLE_FONT, TRAJECTORY_COLOR
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import map_legend

@@ -6,7 +6,7 @@ generator and settings), then shapes the result for a drone that starts and ends
 floor:
 
 * the drone stands on the floor under the start (see
-  :class:`~quadnav.hardware.frames.TakeoffFrame`), takes off straight up to about
+  :class:`~quadnav.hardware.bridge.frames.TakeoffFrame`), takes off straight up to about
   :data:`TAKEOFF_HEIGHT`, then moves straight up or down to the start's height;
 * the **route** (:class:`Route`) runs from there along the planner's start leg, the
   planned path and the goal leg, ending at the goal; a leg's part in the floor's margin
@@ -18,7 +18,7 @@ The path is planned with the margin plus :data:`TRACKING_ALLOWANCE`, the geofenc
 margin itself, so rounding to centimetres and tracking errors do not breach the fence.
 Only the start's *zone* — the takeoff column, the climb or descent to the leg and the
 leg — and the goal's — the leg and the landing column — may come closer than the margin;
-they stay in the leg's room (:mod:`quadnav.hardware.leg_room`: never closer to a block
+they stay in the leg's room (:mod:`quadnav.hardware.bridge.leg_room`: never closer to a block
 than the start or goal itself, never outside the boundary, near a wall only where the leg
 is), everything else in the fence. The trajectory (for ``rc`` mode and the plot) runs
 through the takeoff point and the route, each zone flown straight from rest to rest at
@@ -46,12 +46,12 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.hardware.arc import Arc
-from quadnav.hardware.curves import CURVE_SPEED, Curve, fit_commands
-from quadnav.hardware.frames import GROUND_Z, IntArray, TakeoffFrame, to_cm
-from quadnav.hardware.geofence import Geofence, Region
-from quadnav.hardware.leg_room import LegRoom
-from quadnav.hardware.lost_link import LostLinkBound, creeping_pace
-from quadnav.hardware.moves import Move, MoveError, go_moves, go_speed
+from quadnav.hardware.bridge.curves import CURVE_SPEED, Curve, fit_commands
+from quadnav.hardware.bridge.frames import GROUND_Z, IntArray, TakeoffFrame, to_cm
+from quadnav.hardware.bridge.geofence import Geofence, Region
+from quadnav.hardware.bridge.leg_room import LegRoom
+from quadnav.hardware.bridge.lost_link import LostLinkBound, creeping_pace
+from quadnav.hardware.bridge.moves import Move, MoveError, go_moves, go_speed
 from quadnav.planning import (
     PlannerSettings,
     PlanningProblem,
@@ -202,7 +202,7 @@ class FlightPlan:
     def reference_pace(self, tau: float) -> float:
         """The fraction of its own speed at which ``rc`` mode follows the trajectory at
         ``tau`` s: the lost-link bound's pace where it may be then (:meth:`region_at`),
-        on a leg never slower than a creep (:func:`~quadnav.hardware.lost_link.
+        on a leg never slower than a creep (:func:`~quadnav.hardware.bridge.lost_link.
         creeping_pace`)."""
         region = self.region_at(tau)
         velocity = self.trajectory.velocity(tau)
@@ -241,9 +241,10 @@ class FlightPlan:
     def curve_moves(self, height: float, speed: float) -> list[Move | Curve]:
         """``curves`` mode: :meth:`go_moves` through the start's zone and the goal's, and
         between them ``curve`` and ``go`` commands that follow the trajectory within
-        :data:`~quadnav.hardware.curves.TOLERANCE_CM` (:func:`~quadnav.hardware.curves.
-        fit_commands`), every centimetre of each checked against the fence; ``speed``
-        m/s, a curve's clamped to the SDK's 0.6 m/s at most.
+        :data:`~quadnav.hardware.bridge.curves.TOLERANCE_CM`
+        (:func:`~quadnav.hardware.bridge.curves.fit_commands`), every centimetre of each
+        checked against the fence; ``speed`` m/s, a curve's clamped to the SDK's 0.6 m/s
+        at most.
 
         Raises:
             MoveError: a part that no allowed command flies.

@@ -13,7 +13,7 @@ velocity follows its sticks with a delay, and the braking distance at a gentle
 :data:`BRAKE` deceleration. Every stick command keeps that segment inside the geofence
 (:meth:`LostLinkBound.is_safe`, quadnav's exact segment test), from the dead-reckoned
 position — on a leg out of (or into) the margin, inside the leg's room
-(:mod:`quadnav.hardware.leg_room`: no closer to a block than the start or goal itself, nor
+(:mod:`quadnav.hardware.bridge.leg_room`: no closer to a block than the start or goal itself, nor
 to a wall than the leg), where a drone on its leg may be. (The descent that follows is
 straight down, onto the floor — or onto a block the drone is above.) The speed allowed
 along a direction is :func:`safe_speed` of the distance to the fence along it
@@ -35,8 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
-from quadnav.hardware.geofence import Region
-from quadnav.hardware.rc import RC_FULL_SPEED, STICK_MAX
+from quadnav.hardware.bridge.geofence import Region
+from quadnav.hardware.bridge.rc import RC_FULL_SPEED, STICK_MAX
 from quadnav.hardware.sdk import AUTO_LAND_AFTER
 from quadnav.trajectory.model import Trajectory
 

@@ -3,7 +3,7 @@
 The emulated drone answers on UDP port 8889 of its own address (``host``) and sends state
 packets ten times a second to port 8890 of the client that sent ``command``, exactly as
 the firmware does, so djitellopy 2.5 drives it unmodified: ``Tello(host=emulator.host)``.
-Its flight is quadnav's simulator (:mod:`quadnav.hardware.emulated_drone`) in real time,
+Its flight is quadnav's simulator (:mod:`quadnav.hardware.emulator.drone`) in real time,
 or ``time_scale`` times faster: a motion's ``ok`` comes only once the motion is over.
 
 Protocol (:mod:`quadnav.hardware.sdk`): nothing is answered and no state is sent before
@@ -24,8 +24,8 @@ flown (the drone hovers for a second). A command takes effect at the emulated ti
 arrives.
 
 Network: the emulator runs in its own Linux network namespace, joined to the client's by
-a virtual Ethernet pair (:mod:`quadnav.hardware.netns`, which explains why). The client's
-end gets :func:`~quadnav.hardware.netns.peer_address` of ``host``. Needs root (or
+a virtual Ethernet pair (:mod:`quadnav.hardware.emulator.netns`, which explains why). The client's
+end gets :func:`~quadnav.hardware.emulator.netns.peer_address` of ``host``. Needs root (or
 ``unshare -rn``) and iproute2.
 
 Faults for tests (:class:`Faults`): replies dropped with a probability, every reply
@@ -41,7 +41,7 @@ the emulator always keeps.)
 
 Ground truth: with ``truth``, the emulator writes the drone's true track to that file as it
 flies (:class:`~quadnav.hardware.truth.TruthWriter`: UNIX time and world position, every
-:data:`~quadnav.hardware.emulated_drone.TRACK_PERIOD` emulated seconds), each sample
+:data:`~quadnav.hardware.emulator.drone.TRACK_PERIOD` emulated seconds), each sample
 before the reply it precedes, so a client that has heard ``ok`` to ``land`` finds the
 landing in the file. It is the one channel from the emulator's insides to a client such
 as ``quadnav tello fly --truth FILE``, as a motion-capture system's file would be beside a
@@ -68,8 +68,8 @@ from quadnav.arrays import FloatArray
 from quadnav.config import require
 from quadnav.errors import QuadnavError
 from quadnav.hardware import sdk
-from quadnav.hardware.emulated_drone import FLIP_TIME, TAKEOFF_HEIGHT, EmulatedDrone
-from quadnav.hardware.netns import Link, NetNamespace
+from quadnav.hardware.emulator.drone import FLIP_TIME, TAKEOFF_HEIGHT, EmulatedDrone
+from quadnav.hardware.emulator.netns import Link, NetNamespace
 from quadnav.hardware.sdk import (
     AUTO_LAND_AFTER,
     COMMAND_PORT,
@@ -127,8 +127,9 @@ class Faults:
             once it reports less than :data:`~quadnav.hardware.sdk.LOW_BATTERY` percent).
         move_error_m: standard deviation, m, of where a move ends, per axis (the end of a
             ``go``, ``curve`` or ``up`` ... ``back`` is off by a normal draw).
-        takeoff_spread_m: ``takeoff`` climbs to :data:`~quadnav.hardware.
-            emulated_drone.TAKEOFF_HEIGHT` plus a uniform draw in +- this, m.
+        takeoff_spread_m: ``takeoff`` climbs to
+            :data:`~quadnav.hardware.emulator.drone.TAKEOFF_HEIGHT` plus a uniform draw in
+            +- this, m.
         velocity_noise: probability that ``vgx`` and that ``vgy`` of a state packet read
             one unit (dm/s) off, either way.
     """
@@ -331,7 +332,7 @@ class TelloEmulator:
 
     def track(self) -> tuple[FloatArray, FloatArray]:
         """The emulated flight so far: times (N,) emulated s and world positions (N, 3) m,
-        every :data:`~quadnav.hardware.emulated_drone.TRACK_PERIOD` s."""
+        every :data:`~quadnav.hardware.emulator.drone.TRACK_PERIOD` s."""
         with self._lock:
             return self._drone.track()
 
