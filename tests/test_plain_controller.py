@@ -23,7 +23,7 @@ from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world import load_world
 

@@ -12,7 +12,7 @@ from quadnav.control.registry import make_controller
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.sim.wind import WINDS, load_wind
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle.params import load_params
 
 WINDS_FILE = '''

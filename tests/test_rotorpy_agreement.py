@@ -27,8 +27,8 @@ from quadnav.control.se3 import SE3Gains, se3_controller
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
-from quadnav.trajectory.reference import Reference
-from quadnav.trajectory.references import build_reference
+from quadnav.trajectory.references.builtin import build_reference
+from quadnav.trajectory.references.contract import Reference
 from quadnav.vehicle.dynamics import STATE_SIZE, derivative, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotorpy_params import rotor_layout, vehicle_from_rotorpy

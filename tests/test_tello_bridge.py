@@ -79,7 +79,7 @@ from quadnav.hardware.bridge.rc import (
 from quadnav.planning import PlannerSettings
 from quadnav.runs import read_run
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.sampled import read_reference_file
+from quadnav.trajectory.references.sampled import read_reference_file
 from quadnav.world import World, load_world
 from quadnav.world.placement import format_point
 

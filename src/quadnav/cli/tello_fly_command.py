@@ -58,7 +58,7 @@ from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.runs import RUN_FILES
 from quadnav.trajectory.pathfile import read_path_csv
-from quadnav.trajectory.sampled import read_reference_file
+from quadnav.trajectory.references.sampled import read_reference_file
 
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
 DEFAULT_SPEED = 0.5

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from quadnav.sim.flight import Flight
-from quadnav.trajectory.export import csv_table
+from quadnav.trajectory.references.export import csv_table
 
 #: Header of :func:`flight_csv`: time s, position m, velocity m/s, attitude quaternion,
 #: motor commands in [0, 1], and the reference position m.

@@ -1,6 +1,6 @@
 """Fly a reference in simulation: :func:`simulate`.
 
-The reference (a :class:`~quadnav.trajectory.reference.Reference`: a trajectory, a
+The reference (a :class:`~quadnav.trajectory.references.contract.Reference`: a trajectory, a
 built-in shape or samples read from a file) is sampled once at the control rate into a
 reference table (position, velocity, acceleration, yaw, yaw rate; held at the end during
 the settling time); the wind, gusts and sensor noise are drawn up front from
@@ -44,7 +44,7 @@ from quadnav.sim.excursion import Excursion, body_excursion
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import load_wind
-from quadnav.trajectory.reference import Reference
+from quadnav.trajectory.references.contract import Reference
 from quadnav.vehicle.dynamics import ROTORS, STATE_SIZE, hover_state, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
@@ -132,7 +132,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
 
     Args:
         trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
-            any other :class:`~quadnav.trajectory.reference.Reference`.
+            any other :class:`~quadnav.trajectory.references.contract.Reference`.
         params: the vehicle that flies, the plant (default: the ``tello`` preset).
         gains: the cascade's gains, when no ``controller`` is given (default: those tuned
             for ``model``, the vehicle the controller knows,

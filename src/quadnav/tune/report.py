@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 from quadnav.config import toml_text
 from quadnav.report.html_report import figure_html, html_page, html_table, png_bytes
 from quadnav.runfolder import replaced_folder
-from quadnav.trajectory.export import csv_table
+from quadnav.trajectory.references.export import csv_table
 from quadnav.tune.evaluate import (
     FAILURE_PENALTY,
     OVERSHOOT_ALLOWED,

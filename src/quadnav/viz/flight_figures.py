@@ -132,7 +132,7 @@ def _flight(run: Run) -> FlightTable:
 
 def _desired(run: Run, name: str) -> np.ndarray:
     """trajectory.csv's column(s) ``name`` (a field of
-    :class:`~quadnav.trajectory.reference.Samples`: (N,) or (N, 3)) at the flight's sample
+    :class:`~quadnav.trajectory.references.contract.Samples`: (N,) or (N, 3)) at the flight's sample
     times, linearly interpolated (held at the last after its end)."""
     flight, trajectory = _flight(run), run.trajectory
     values = getattr(trajectory, name)

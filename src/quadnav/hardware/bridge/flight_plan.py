@@ -62,6 +62,7 @@ from quadnav.planning import (
 )
 from quadnav.planning.refine import refine
 from quadnav.planning.result import PlanStats, distinct, path_length
+from quadnav.trajectory.clearance.space import SafeSpace
 from quadnav.trajectory.generate import (
     TrajectorySettings,
     join_legs,
@@ -69,7 +70,6 @@ from quadnav.trajectory.generate import (
     make_trajectory,
 )
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.space import SafeSpace
 from quadnav.world.margins import polyline_margin
 from quadnav.world.model import World
 from quadnav.world.placement import format_point

@@ -2,7 +2,7 @@
 
 A smooth trajectory through a few far-apart waypoints brakes towards each of them if each
 segment gets the time of a rest-to-rest move. Here instead (the approach TOPP-RA takes,
-with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
+with the exact acceleration bound of :mod:`quadnav.trajectory.timing.speed_profile`):
 
 1. :func:`knots` adds waypoints on the path's straight segments, about
    :data:`KNOT_INTERVAL` seconds of flight apart (closer where the flight speeds up from
@@ -10,7 +10,7 @@ with the exact acceleration bound of :mod:`quadnav.trajectory.speed_profile`):
    They lie on the path's segments, which are free, so the collision refinement still
    applies.
 2. :func:`fastest_times` builds the trajectory, finds the fastest speed along its own
-   curve within the limits (:func:`~quadnav.trajectory.speed_profile.fastest_speeds`),
+   curve within the limits (:func:`~quadnav.trajectory.timing.speed_profile.fastest_speeds`),
    and gives each segment the time that speed takes over it; the new times change the
    curve a little, so this repeats :data:`PROFILE_ROUNDS` times. The profile lets the
    acceleration grow from rest over :data:`RAMP_TIME` (a minimum-snap trajectory starts
@@ -35,8 +35,8 @@ from numpy.typing import NDArray
 from quadnav.arrays import FloatArray
 from quadnav.trajectory.feasibility import Limits, quantities
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
-from quadnav.trajectory.timing import rest_to_rest_distance, rest_to_rest_duration
+from quadnav.trajectory.timing.segment_times import rest_to_rest_distance, rest_to_rest_duration
+from quadnav.trajectory.timing.speed_profile import fastest_speeds, travel_times
 
 #: ``build(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
 Build = Callable[[FloatArray, FloatArray], Trajectory]

@@ -8,7 +8,7 @@ both ends (quintic Hermite interpolation).
   zero acceleration; at rest at both ends.
 * :func:`quintic_c2` — interior velocities and accelerations such that jerk and snap are
   continuous too: the minimum-jerk spline (C4), which
-  :func:`~quadnav.trajectory.minsnap.minimum_derivative` solves with ``derivative=3``.
+  :func:`~quadnav.trajectory.polynomials.minsnap.minimum_derivative` solves with ``derivative=3``.
 
 The Hermite pieces are written here rather than by scipy's ``BPoly.from_derivatives``:
 that one agrees to 1e-12 but not exactly at the waypoints (its Bernstein coefficients
@@ -28,10 +28,14 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.minsnap import minimum_derivative
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.polybasis import check_waypoints_and_times, derivative_rows, make_trajectory
-from quadnav.trajectory.timing import segment_lengths
+from quadnav.trajectory.polynomials.basis import (
+    check_waypoints_and_times,
+    derivative_rows,
+    make_trajectory,
+)
+from quadnav.trajectory.polynomials.minsnap import minimum_derivative
+from quadnav.trajectory.timing.segment_times import segment_lengths
 
 #: Coefficients in tau (6,) from the end conditions ``[p0, v0, a0, p1, v1, a1]`` (tau units).
 _HERMITE = np.linalg.inv(np.vstack([derivative_rows(6, order, tau)
@@ -98,7 +102,7 @@ def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     velocity" end conditions: at an interior waypoint the velocity is the mean of the
     average velocities ``(p_{i+1} - p_i) / T_i`` of the segments arriving and leaving,
     and the acceleration is zero. With segment times length / v (see
-    :func:`~quadnav.trajectory.timing.average_times`) that is speed v along a straight
+    :func:`~quadnav.trajectory.timing.segment_times.average_times`) that is speed v along a straight
     line and less in turns.
 
     Args:
@@ -120,7 +124,7 @@ def quintic_average(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
 def quintic_c2(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
     """Quintic segments through ``waypoints`` with continuous velocity, acceleration, jerk
     and snap: the minimum-jerk spline, at rest (zero velocity and acceleration) at both ends
-    (:func:`~quadnav.trajectory.minsnap.minimum_derivative` with ``derivative=3``).
+    (:func:`~quadnav.trajectory.polynomials.minsnap.minimum_derivative` with ``derivative=3``).
 
     Args:
         waypoints: (N, 3) points, metres, N >= 2, no two consecutive ones equal.

@@ -10,7 +10,7 @@ canonical spec, which lists every parameter.
   its position jumps by ``size`` along ``axis`` while its velocity and acceleration stay 0
   (a true step, as the course tunes gains with): :class:`StepReference`.
 * ``circle``, ``helix``, ``figure8`` and ``lissajous`` fly a shape ``p(phi)`` from
-  ``(0, 0, height)`` by a smooth time law (:class:`~quadnav.trajectory.timelaw.PhaseLaw`:
+  ``(0, 0, height)`` by a smooth time law (:class:`~quadnav.trajectory.references.timelaw.PhaseLaw`:
   from rest, up to the cruise rate over ``ramp`` s, and back to rest over the last
   ``ramp`` s), with exact derivatives: :class:`ShapedReference`.
 
@@ -32,10 +32,18 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_DURATION, SPEED, Range
 from quadnav.specs import AXIS, FLOAT, INT, Param, SpecError, SpecInfo, describe_params, parse_spec
-from quadnav.trajectory.plain import flat_reference, is_trajectory_class, load_trajectory_class
-from quadnav.trajectory.reference import Reference, Sampling
-from quadnav.trajectory.sampled import COURSE_MP_RATE, is_reference_file, read_reference_file
-from quadnav.trajectory.timelaw import PhaseLaw
+from quadnav.trajectory.references.contract import Reference, Sampling
+from quadnav.trajectory.references.plain import (
+    flat_reference,
+    is_trajectory_class,
+    load_trajectory_class,
+)
+from quadnav.trajectory.references.sampled import (
+    COURSE_MP_RATE,
+    is_reference_file,
+    read_reference_file,
+)
+from quadnav.trajectory.references.timelaw import PhaseLaw
 
 TWO_PI = 2.0 * math.pi
 
@@ -367,11 +375,11 @@ def build_reference(spec: str) -> Reference:
 def load_reference(source: str | Path, rate: float = COURSE_MP_RATE, dt: float | None = None,
                    duration: float | None = None) -> Reference:
     """A reference from a file (quadnav's trajectory.csv, or an MP.csv read at ``rate``
-    columns per second, Hz: :func:`~quadnav.trajectory.sampled.read_reference_file`), a
+    columns per second, Hz: :func:`~quadnav.trajectory.references.sampled.read_reference_file`), a
     built-in reference spec (:func:`build_reference`), or a trajectory class of your own,
     ``module:Class`` or ``path/to/file.py:Class`` with literal keyword arguments, built
     from them and sampled every ``dt`` s (the control interval) for ``duration`` s or as
-    long as it says it lasts (:mod:`quadnav.trajectory.plain`).
+    long as it says it lasts (:mod:`quadnav.trajectory.references.plain`).
 
     Raises:
         QuadnavError: none of these, or a bad one (:class:`~quadnav.plugins.PluginError`

@@ -17,7 +17,7 @@ from scipy.optimize import minimize
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.polybasis import check_waypoints_and_times
+from quadnav.trajectory.polynomials.basis import check_waypoints_and_times
 
 #: Default top speed, m/s, of every trajectory (``fly``, ``traj`` and the library): an
 #: indoor cruise speed for a Tello-class (80 g) drone, within what it can fly.

@@ -29,10 +29,10 @@ flat outputs (``rotorpy/trajectories/traj_template.py``), named where it is
   (every derivative 0), as every quadnav reference does, whatever ``update`` says then.
 
 Between samples the reference is the quintic Hermite interpolation of the samples'
-position, velocity and acceleration (:func:`~quadnav.trajectory.sampled.sampled_reference`),
-exact at every sample (to rounding), so the closed loop, which reads the reference at the
-same ``k dt``, flies what ``update`` returned there; the yaw rate flown is ``yaw_dot`` as
-returned.
+position, velocity and acceleration
+(:func:`~quadnav.trajectory.references.sampled.sampled_reference`), exact at every sample
+(to rounding), so the closed loop, which reads the reference at the same ``k dt``, flies
+what ``update`` returned there; the yaw rate flown is ``yaw_dot`` as returned.
 """
 
 from __future__ import annotations
@@ -57,8 +57,8 @@ from quadnav.plugins import (
     raised_in,
     takes_keyword,
 )
-from quadnav.trajectory.reference import Samples, sample_times
-from quadnav.trajectory.sampled import SampledReference, sampled_reference
+from quadnav.trajectory.references.contract import Samples, sample_times
+from quadnav.trajectory.references.sampled import SampledReference, sampled_reference
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
@@ -82,7 +82,7 @@ MISSION_ARGUMENTS = ("points", "world", "start", "goal")
 @dataclass(frozen=True, eq=False)
 class FlatOutputReference(SampledReference):
     """A trajectory class sampled at the control rate (see the module docstring): a
-    :class:`~quadnav.trajectory.sampled.SampledReference` with the yaw rate as returned
+    :class:`~quadnav.trajectory.references.sampled.SampledReference` with the yaw rate as returned
     and, in a mission, the times of its legs.
 
     Attributes:

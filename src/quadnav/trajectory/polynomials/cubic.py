@@ -7,8 +7,8 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline, PPoly
 
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.polybasis import check_waypoints_and_times
-from quadnav.trajectory.timing import segment_lengths
+from quadnav.trajectory.polynomials.basis import check_waypoints_and_times
+from quadnav.trajectory.timing.segment_times import segment_lengths
 
 
 def cubic_spline(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:

@@ -1,10 +1,10 @@
 """A reference read from samples in a file: quadnav's ``trajectory.csv`` or the course's
 ``MP.csv``: :func:`read_reference_file`.
 
-* ``trajectory.csv`` (:func:`~quadnav.trajectory.export.trajectory_csv`): the header
+* ``trajectory.csv`` (:func:`~quadnav.trajectory.references.export.trajectory_csv`): the header
   ``t,x,y,z,vx,vy,vz,ax,ay,az,yaw``, then one sample per line at its own time (the first
   0 s, each after the one before).
-* ``MP.csv`` (:func:`~quadnav.trajectory.export.mp_csv`, the course's layout): no header,
+* ``MP.csv`` (:func:`~quadnav.trajectory.references.export.mp_csv`, the course's layout): no header,
   9 rows ``x, y, z, vx, vy, vz, ax, ay, az`` and one column per sample, with no times: the
   columns are read as every ``1 / rate`` s from 0. The course's starter code (the
   Blender ``usercode.py`` of RBE595's tree-planning project) moves on by one column per
@@ -14,8 +14,8 @@
 
 Between samples the reference is the quintic Hermite interpolation of the position,
 velocity and acceleration at the samples
-(:func:`~quadnav.trajectory.quintic.hermite_trajectory`): exact at every sample, and with
-continuous acceleration. Yaw is linear between samples (MP.csv has none: 0).
+(:func:`~quadnav.trajectory.polynomials.quintic.hermite_trajectory`): exact at every
+sample, and with continuous acceleration. Yaw is linear between samples (MP.csv has none: 0).
 
 Every problem is one :class:`~quadnav.errors.MapError` naming the file and the line (and
 column) at fault.
@@ -33,10 +33,10 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
 from quadnav.inputfiles import special_file
 from quadnav.limits import COORDINATE, MAX_DURATION, MAX_SAMPLES, Range
-from quadnav.trajectory.export import CSV_HEADER, MP_ROWS
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.quintic import hermite_trajectory
-from quadnav.trajectory.reference import Samples, Sampling
+from quadnav.trajectory.polynomials.quintic import hermite_trajectory
+from quadnav.trajectory.references.contract import Samples, Sampling
+from quadnav.trajectory.references.export import CSV_HEADER, MP_ROWS
 from quadnav.world.reading import decode_text, is_number_text, read_file, shown_text, text_lines
 
 #: Columns per second of an MP.csv that the course's code plays (one every 0.05 s), Hz.
@@ -50,7 +50,8 @@ TABLE_FORMAT = "trajectory.csv"
 
 @dataclass(frozen=True, eq=False)
 class SampledReference(Sampling):
-    """A :class:`~quadnav.trajectory.reference.Reference` through samples read from a file.
+    """A :class:`~quadnav.trajectory.references.contract.Reference` through samples read
+    from a file.
 
     Attributes:
         name: where the samples came from (the file's path).

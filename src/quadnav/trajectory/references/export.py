@@ -4,8 +4,8 @@ Numbers are written with ``%.9g`` (nine significant digits: below a micrometre f
 positions up to 100 m, and a microsecond for times up to 1000 s), comma-separated, one
 line per row ending in ``\\n``. The table's samples are those of ``reference.sample(dt)``:
 every ``dt`` s from 0 and the end time; MP.csv, which has no times, is sampled at exactly
-``k dt`` (:func:`~quadnav.trajectory.reference.grid_times`), so that its columns are
-uniform and :mod:`quadnav.trajectory.sampled` reads it back exactly.
+``k dt`` (:func:`~quadnav.trajectory.references.contract.grid_times`), so that its columns are
+uniform and :mod:`quadnav.trajectory.references.sampled` reads it back exactly.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.reference import Reference, grid_times, samples_at
+from quadnav.trajectory.references.contract import Reference, grid_times, samples_at
 
 #: Header of :func:`trajectory_csv`: time s, position m, velocity m/s, acceleration
 #: m/s^2, yaw rad.

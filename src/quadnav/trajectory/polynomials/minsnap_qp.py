@@ -1,7 +1,7 @@
 """Minimum-snap trajectories with corridors and velocity / acceleration limits, as QPs
 solved by Clarabel.
 
-Same cost and equality constraints as :func:`quadnav.trajectory.minsnap.minimum_snap`
+Same cost and equality constraints as :func:`quadnav.trajectory.polynomials.minsnap.minimum_snap`
 (waypoints, rest at both ends, continuity up to snap at interior waypoints), plus linear
 inequalities at the sample times ``tau = k / K``, ``k = 1..K`` (``K =
 samples_per_segment``) of every segment, so that every waypoint is a sample too:
@@ -32,9 +32,9 @@ from scipy import sparse
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory import polybasis
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.polybasis import METHODS
+from quadnav.trajectory.polynomials import basis
+from quadnav.trajectory.polynomials.basis import METHODS
 
 #: Order of the minimised derivative (snap).
 SNAP = 4
@@ -104,13 +104,13 @@ def inequality_constraints(times: FloatArray, boxes: FloatArray | None, v_max: f
     n, taus = 2 * SNAP, np.arange(1, samples + 1) / samples
     blocks, bounds = [], []
     if boxes is not None:
-        rows = sparse.kron(sparse.eye(len(times)), polybasis.derivative_rows(n, 0, taus[:-1]))
+        rows = sparse.kron(sparse.eye(len(times)), basis.derivative_rows(n, 0, taus[:-1]))
         blocks += [rows, -rows]
         bounds += [np.repeat(boxes[:, 3:], samples - 1, axis=0),
                    -np.repeat(boxes[:, :3], samples - 1, axis=0)]
     for order, limit in ((1, v_max), (2, a_max)):
         if limit is not None:
-            rows = sparse.kron(sparse.eye(len(times)), polybasis.derivative_rows(n, order, taus))
+            rows = sparse.kron(sparse.eye(len(times)), basis.derivative_rows(n, order, taus))
             bound = np.repeat(limit / np.sqrt(3) * times ** order, samples)[:, None]
             blocks += [rows, -rows]
             bounds += [np.repeat(bound, 3, axis=1)] * 2
@@ -147,7 +147,7 @@ def minimum_snap_qp(waypoints: ArrayLike, times: ArrayLike, *,
         QuadnavError: bad input, or a QP that Clarabel did not solve (infeasible: the
             corridors or limits are too tight for the segment times).
     """
-    points, durations = polybasis.check_waypoints_and_times(waypoints, times)
+    points, durations = basis.check_waypoints_and_times(waypoints, times)
     if not _is_count(samples_per_segment):
         raise QuadnavError(f"samples_per_segment is {samples_per_segment!r}; expected an "
                            "integer >= 1")
@@ -158,8 +158,8 @@ def minimum_snap_qp(waypoints: ArrayLike, times: ArrayLike, *,
     origin = points.mean(axis=0)  # positions relative to it keep the coefficients small
     if boxes is not None:
         boxes = boxes - np.tile(origin, 2)
-    P = sparse.triu(polybasis.cost_matrix(durations, SNAP), format="csc")
-    A, b = polybasis.equality_constraints(points - origin, durations, SNAP, continuity=SNAP)
+    P = sparse.triu(basis.cost_matrix(durations, SNAP), format="csc")
+    A, b = basis.equality_constraints(points - origin, durations, SNAP, continuity=SNAP)
     G, h = inequality_constraints(durations, boxes, v_max, a_max, samples_per_segment)
     constraints = sparse.vstack([A, G], format="csc")
     cones = [clarabel.ZeroConeT(A.shape[0])]
@@ -187,8 +187,8 @@ def minimum_snap_qp(waypoints: ArrayLike, times: ArrayLike, *,
         seconds += solution.solve_time
     coefficients = np.stack(columns, axis=1).reshape(len(durations), 2 * SNAP, 3)
     coefficients[:, 0] += origin
-    info = {"cost": polybasis.trajectory_cost(coefficients, durations, SNAP),
+    info = {"cost": basis.trajectory_cost(coefficients, durations, SNAP),
             "solver": "clarabel", "status": ", ".join(sorted(set(statuses))),
             "iterations": iterations,
             "solve_time": seconds, "continuity": SNAP, "inequalities": int(G.shape[0])}
-    return polybasis.make_trajectory(coefficients, points, durations, METHODS[SNAP], info)
+    return basis.make_trajectory(coefficients, points, durations, METHODS[SNAP], info)

@@ -1,6 +1,6 @@
 """A smooth time law for shapes flown round and round: :class:`PhaseLaw`.
 
-A shape ``p(phi)`` (:mod:`quadnav.trajectory.references`) is flown by letting its phase
+A shape ``p(phi)`` (:mod:`quadnav.trajectory.references.builtin`) is flown by letting its phase
 ``phi`` run from 0 to ``total``. The phase's rate rises from 0 to the cruise ``rate`` over
 ``ramp`` seconds, cruises, and falls back to 0 over the last ``ramp`` seconds. The rise is
 the C2 smoothstep ``s(u) = 10 u^3 - 15 u^4 + 6 u^5`` of ``u = t / ramp`` (the fall its

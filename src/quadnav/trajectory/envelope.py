@@ -23,6 +23,7 @@ from quadnav.arrays import FloatArray
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED
+from quadnav.trajectory.clearance.space import SafeSpace
 from quadnav.trajectory.feasibility import (
     GRAVITY,
     FeasibilityReport,
@@ -32,7 +33,6 @@ from quadnav.trajectory.feasibility import (
 )
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.space import SafeSpace
 from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotors import roll_pitch_acceleration_max
 

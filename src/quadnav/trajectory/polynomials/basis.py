@@ -1,5 +1,6 @@
 """Shared matrices of piecewise polynomials in normalised time, for minimum-derivative
-trajectories (:mod:`quadnav.trajectory.minsnap`, :mod:`quadnav.trajectory.minsnap_qp`).
+trajectories (:mod:`quadnav.trajectory.polynomials.minsnap`,
+:mod:`quadnav.trajectory.polynomials.minsnap_qp`).
 
 Segment ``i`` of duration ``T_i`` s runs from waypoint ``i`` to waypoint ``i + 1``; per
 axis it is ``p(tau) = sum_k c_k tau^k`` with ``2r`` coefficients (degree ``2r - 1``: 7 for

@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.collision import (
+from quadnav.trajectory.clearance.collision import (
     checked_waypoints,
     insert_points,
     require_free_polyline,

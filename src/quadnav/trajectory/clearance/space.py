@@ -28,9 +28,9 @@ from scipy.interpolate import BPoly, PPoly
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.legs import leg_world
-from quadnav.trajectory.collision import check_samples
+from quadnav.trajectory.clearance.collision import check_samples
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.plain import FlatOutputReference
+from quadnav.trajectory.references.plain import FlatOutputReference
 from quadnav.world.margins import box_margins, rounded, segment_box_margins
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
@@ -106,7 +106,7 @@ def trajectory_margins(trajectory: Trajectory, world: World, spacing: float = 0.
     on the legs)``; the second is None without legs.
 
     The stretches measured are the check samples of
-    :func:`~quadnav.trajectory.collision.check_samples`, at most ``spacing`` metres apart;
+    :func:`~quadnav.trajectory.clearance.collision.check_samples`, at most ``spacing`` metres apart;
     the bound is below the true margin by about the stretches' bend, under 0.5 mm at the
     default 5 mm. Values are rounded as by :func:`windowed_margins`.
     """
@@ -120,8 +120,9 @@ def reference_margins(reference: Trajectory | FlatOutputReference, world: World
     """The margin (per axis, m) ``reference`` keeps from the real blocks and the boundary of
     ``world``, ``(off the legs, on the legs)`` (:meth:`main_window`): a
     :class:`~quadnav.trajectory.model.Trajectory` by :func:`trajectory_margins`; a
-    trajectory class's samples (:class:`~quadnav.trajectory.plain.FlatOutputReference`, what
-    the closed loop flies, at the control rate) taken as straight between consecutive
+    trajectory class's samples
+    (:class:`~quadnav.trajectory.references.plain.FlatOutputReference`, what the closed
+    loop flies, at the control rate) taken as straight between consecutive
     samples, each stretch measured by its bounding box, as a flight's track is."""
     if isinstance(reference, Trajectory):
         return trajectory_margins(reference, world)

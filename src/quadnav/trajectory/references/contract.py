@@ -2,8 +2,8 @@
 
 A reference is anything that gives the desired position, velocity, acceleration and yaw
 at any time: a :class:`~quadnav.trajectory.model.Trajectory` through waypoints, a built-in
-shape (:mod:`quadnav.trajectory.references`: a circle is flown as a circle, not as a
-polynomial fitted to it) or samples read from a file (:mod:`quadnav.trajectory.sampled`).
+shape (:mod:`quadnav.trajectory.references.builtin`: a circle is flown as a circle, not as a
+polynomial fitted to it) or samples read from a file (:mod:`quadnav.trajectory.references.sampled`).
 :func:`quadnav.sim.simulate` and the run folder use nothing else of it.
 
 Units and shapes: times in seconds from the start, a scalar or an (N,) array; positions m,
@@ -14,7 +14,7 @@ and the first or last yaw.
 
 A reference may also have ``yaw_rate(t)`` (rad/s, the shape of ``yaw``): the closed loop
 then flies that yaw rate (a plain-Python trajectory's ``yaw_dot``,
-:mod:`quadnav.trajectory.plain`) instead of the finite difference of the yaw.
+:mod:`quadnav.trajectory.references.plain`) instead of the finite difference of the yaw.
 """
 
 from __future__ import annotations

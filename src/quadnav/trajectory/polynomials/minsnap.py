@@ -7,8 +7,9 @@ continuous derivatives 1..r at the interior waypoints (up to snap for ``r = 4``,
 ``r = 3``). Without inequality constraints this is an equality-constrained QP whose
 optimum solves one sparse linear (KKT) system; it is in fact ``C^(2r - 2)`` (the natural
 conditions of the optimum make derivatives r+1..2r-2 continuous too). The matrices are
-those of :mod:`quadnav.trajectory.polybasis`; :mod:`quadnav.trajectory.minsnap_qp` adds
-corridors and limits (:func:`~quadnav.trajectory.minsnap_qp.minimum_snap_qp`).
+those of :mod:`quadnav.trajectory.polynomials.basis`;
+:mod:`quadnav.trajectory.polynomials.minsnap_qp` adds corridors and limits
+(:func:`~quadnav.trajectory.polynomials.minsnap_qp.minimum_snap_qp`).
 """
 
 from __future__ import annotations
@@ -19,9 +20,9 @@ from scipy import sparse
 from scipy.sparse.linalg import splu
 
 from quadnav.errors import QuadnavError
-from quadnav.trajectory import polybasis
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.polybasis import METHODS
+from quadnav.trajectory.polynomials import basis
+from quadnav.trajectory.polynomials.basis import METHODS
 
 __all__ = ["METHODS", "minimum_derivative", "minimum_snap", "snap_cost"]
 
@@ -50,17 +51,17 @@ def minimum_derivative(waypoints: ArrayLike, times: ArrayLike, derivative: int =
     if derivative not in METHODS:
         raise QuadnavError(f"derivative must be one of {sorted(METHODS)} "
                            f"(jerk, snap), got {derivative}")
-    points, durations = polybasis.check_waypoints_and_times(waypoints, times)
+    points, durations = basis.check_waypoints_and_times(waypoints, times)
     r = derivative
-    Q = polybasis.cost_matrix(durations, r)
-    A, b = polybasis.equality_constraints(points, durations, r, continuity=r)
+    Q = basis.cost_matrix(durations, r)
+    A, b = basis.equality_constraints(points, durations, r, continuity=r)
     kkt = sparse.bmat([[Q, A.T], [A, None]], format="csc")
     rhs = np.vstack([np.zeros((Q.shape[0], 3)), b])
     solution = splu(kkt).solve(rhs)
     coefficients = solution[:Q.shape[0]].reshape(len(durations), 2 * r, 3)
-    info = {"cost": polybasis.trajectory_cost(coefficients, durations, r),
+    info = {"cost": basis.trajectory_cost(coefficients, durations, r),
             "solver": "scipy.sparse.linalg.splu (KKT)", "continuity": r}
-    return polybasis.make_trajectory(coefficients, points, durations, METHODS[r], info)
+    return basis.make_trajectory(coefficients, points, durations, METHODS[r], info)
 
 
 def minimum_snap(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:
