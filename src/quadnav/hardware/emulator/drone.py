@@ -41,7 +41,16 @@ from quadnav.hardware.sdk import LOW_BATTERY, Telemetry
 from quadnav.sim import loop
 from quadnav.sim.settings import SimSettings
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import hover_state, rk4_step, rk4_workspace, vehicle_arrays
+from quadnav.vehicle.dynamics import (
+    ATTITUDE,
+    POSITION,
+    ROTORS,
+    VELOCITY,
+    hover_state,
+    rk4_step,
+    rk4_workspace,
+    vehicle_arrays,
+)
 from quadnav.vehicle.params import VehicleParams, load_params
 
 #: Height of the hover after ``takeoff`` above the floor, m (the SDK's "about 80 cm").
@@ -198,7 +207,7 @@ class Motion:
 
 
 def _world_yaw(state: FloatArray) -> float:
-    r = quaternion.to_matrix(state[6:10])
+    r = quaternion.to_matrix(state[ATTITUDE])
     return math.atan2(r[1, 0], r[0, 0])
 
 
@@ -274,7 +283,7 @@ class EmulatedDrone:
     @property
     def position(self) -> FloatArray:
         """(3,) world position, m."""
-        return self._state[0:3].copy()
+        return self._state[POSITION].copy()
 
     @property
     def yaw(self) -> float:
@@ -323,7 +332,7 @@ class EmulatedDrone:
         self.motion = None
         self.landing = False
         self._sticks = (np.zeros(3), 0.0)
-        self._set_setpoint(self.position, self._state[3:6].copy(), self.yaw)
+        self._set_setpoint(self.position, self._state[VELOCITY].copy(), self.yaw)
 
     def sticks(self, right: int, forward: int, up: int, clockwise: int) -> None:
         """``rc``: the setpoint's velocity from the four sticks, each -100..100."""
@@ -349,16 +358,16 @@ class EmulatedDrone:
             return False
         self._carry -= steps * self._dt
         times = self.time + self._dt * np.arange(steps)
-        velocity = self._state[3:6].copy()
+        velocity = self._state[VELOCITY].copy()
         if self.falling:
             positions = self._fall(steps)
         elif self.flying:
             positions = self._fly(self._references(times))
         else:
-            positions = np.tile(self._state[0:3], (steps, 1))
+            positions = np.tile(self._state[POSITION], (steps, 1))
         self._record(times, positions)
         elapsed = steps * self._dt
-        self._acceleration = (self._state[3:6] - velocity) / elapsed
+        self._acceleration = (self._state[VELOCITY] - velocity) / elapsed
         self.time += elapsed
         if self.flying:
             self.motor_time += elapsed
@@ -373,11 +382,11 @@ class EmulatedDrone:
 
     def telemetry(self, mission_pads: bool = False) -> Telemetry:
         """The state packet's values now (see :class:`~quadnav.hardware.sdk.Telemetry`)."""
-        r = quaternion.to_matrix(self._state[6:10])
+        r = quaternion.to_matrix(self._state[ATTITUDE])
         yaw = self.yaw
         forward = np.array([math.cos(yaw), math.sin(yaw), 0.0])
         left = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-        v = self._state[3:6]
+        v = self._state[VELOCITY]
         # specific force along body x forward, y left, z up
         force = r.T @ (self._acceleration + np.array([0.0, 0.0, _G]))
         height = max(0, round(100 * (self._state[2] - self.floor)))
@@ -399,7 +408,7 @@ class EmulatedDrone:
     def _resting(self, position: FloatArray, yaw: float) -> FloatArray:
         """At rest on the floor below ``position``, level, heading ``yaw``, motors off."""
         state = hover_state(self.params, [position[0], position[1], self.floor], yaw)
-        state[13:17] = 0.0
+        state[ROTORS] = 0.0
         return state
 
     @staticmethod
@@ -452,22 +461,22 @@ class EmulatedDrone:
             self.motion, self.landing, self.flying = None, False, False
             records[done:] = self._resting(records[done - 1], self.yaw)
             self._state = records[-1].copy()
-            self._set_setpoint(self._state[0:3], np.zeros(3), self.yaw)
-        return records[:, 0:3]
+            self._set_setpoint(self._state[POSITION], np.zeros(3), self.yaw)
+        return records[:, POSITION]
 
     def _fall(self, steps: int) -> FloatArray:
         """Motors off, under gravity to the floor; positions (K, 3) before each step."""
         positions = np.empty((steps, 3))
         off, still, work = np.zeros(4), np.zeros(3), rk4_workspace()
         for k in range(steps):
-            positions[k] = self._state[0:3]
+            positions[k] = self._state[POSITION]
             for _ in range(self.settings.substeps):
                 rk4_step(self._state, off, self._vehicle, still, still,
                          self._dt / self.settings.substeps, self.floor, work)
         if self._state[2] <= self.floor + 1e-6 and abs(self._state[5]) < 1e-6:
             self.falling = False
-            self._state = self._resting(self._state[0:3], self.yaw)
-            self._set_setpoint(self._state[0:3], np.zeros(3), self.yaw)
+            self._state = self._resting(self._state[POSITION], self.yaw)
+            self._set_setpoint(self._state[POSITION], np.zeros(3), self.yaw)
         return positions
 
     def _record(self, times: FloatArray, positions: FloatArray) -> None:
@@ -486,8 +495,8 @@ class EmulatedDrone:
         late = self.time - self._motion_began - self.motion.duration
         if late < 0:
             return False
-        settled = (np.linalg.norm(self._state[0:3] - end) < SETTLE_DISTANCE
-                   and np.linalg.norm(self._state[3:6]) < SETTLE_SPEED
+        settled = (np.linalg.norm(self._state[POSITION] - end) < SETTLE_DISTANCE
+                   and np.linalg.norm(self._state[VELOCITY]) < SETTLE_SPEED
                    and abs(_wrap(self.yaw - end_yaw)) < SETTLE_YAW)
         if not settled and late < SETTLE_TIMEOUT:
             return False
@@ -495,5 +504,5 @@ class EmulatedDrone:
         self._set_setpoint(end, np.zeros(3), end_yaw)
         if self.landing:
             self.landing, self.flying = False, False
-            self._state = self._resting(self._state[0:3], self.yaw)
+            self._state = self._resting(self._state[POSITION], self.yaw)
         return True

@@ -46,6 +46,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from quadnav.arrays import FloatArray
+from quadnav.control.contract import (
+    REFERENCE_ACCELERATION,
+    REFERENCE_POSITION,
+    REFERENCE_SIZE,
+    REFERENCE_VELOCITY,
+    REFERENCE_YAW,
+    REFERENCE_YAW_RATE,
+)
 from quadnav.errors import QuadnavError
 from quadnav.limits import COORDINATE, MAX_DURATION, MAX_SAMPLES, check_count
 from quadnav.plugins import (
@@ -68,9 +76,12 @@ FORMAT = "update(t)"
 VECTORS = ("x", "x_dot", "x_ddot")
 SCALARS = ("yaw", "yaw_dot")
 FLOWN = (*VECTORS, *SCALARS)
-#: Columns of each key in a sample row (x 0-2, x_dot 3-5, x_ddot 6-8, yaw 9, yaw_dot 10).
-_COLUMNS = {"x": slice(0, 3), "x_dot": slice(3, 6), "x_ddot": slice(6, 9),
-            "yaw": slice(9, 10), "yaw_dot": slice(10, 11)}
+#: Columns of each key in a sample row: a reference row's (x 0-2, x_dot 3-5, x_ddot 6-8,
+#: yaw 9, yaw_dot 10; :mod:`quadnav.control.contract`).
+_COLUMNS = {"x": REFERENCE_POSITION, "x_dot": REFERENCE_VELOCITY,
+            "x_ddot": REFERENCE_ACCELERATION,
+            "yaw": slice(REFERENCE_YAW, REFERENCE_YAW + 1),
+            "yaw_dot": slice(REFERENCE_YAW_RATE, REFERENCE_YAW_RATE + 1)}
 KIND = "reference"
 #: What a mission gives a trajectory class it builds, by keyword, when its constructor has
 #: such a parameter and the spec leaves it out: the planned path (N, 3) m, and the real map
@@ -225,7 +236,7 @@ def flat_reference(trajectory: Any, name: str, dt: float, duration: float | None
                 f"at the control rate ({1 / dt:g} Hz) gives samples",
                 "shorten it (--duration) or lower --control-rate")
     times = sample_times(duration, dt)
-    rows = np.empty((len(times), 11))
+    rows = np.empty((len(times), REFERENCE_SIZE))
     for k, t in enumerate(times):
         try:
             flat = trajectory.update(float(t))
@@ -233,12 +244,13 @@ def flat_reference(trajectory: Any, name: str, dt: float, duration: float | None
             raise raised_in(KIND, name, f"update({t:.6g})", error) from None
         rows[k] = _row(flat, name, float(t))
     _check_values(rows, times, name)
-    samples = Samples(times, rows[:, 0:3], rows[:, 3:6], rows[:, 6:9], rows[:, 9])
+    samples = Samples(times, rows[:, REFERENCE_POSITION], rows[:, REFERENCE_VELOCITY],
+                      rows[:, REFERENCE_ACCELERATION], rows[:, REFERENCE_YAW])
     info = {"format": FORMAT, "samples": len(times), "sample_interval_s": dt,
             "duration_s": float(duration), "duration_from": source}
     base = sampled_reference(name, FORMAT, samples, info)
     return FlatOutputReference(base.name, base.format, base.samples, base.motion, base.info,
-                               yaw_rates=rows[:, 10].copy())
+                               yaw_rates=rows[:, REFERENCE_YAW_RATE].copy())
 
 
 def _row(flat: Any, name: str, t: float) -> FloatArray:
@@ -253,7 +265,7 @@ def _row(flat: Any, name: str, t: float) -> FloatArray:
     if missing:
         raise PluginError(f"{where} no {', '.join(missing)} (it gave "
                           f"{', '.join(map(str, flat)) or 'nothing'}): {expected}", exit_code=1)
-    row = np.empty(11)
+    row = np.empty(REFERENCE_SIZE)
     for key in FLOWN:
         try:
             value = np.asarray(flat[key], dtype=np.float64)
@@ -272,7 +284,8 @@ def _check_values(rows: FloatArray, times: FloatArray, name: str) -> None:
     """PluginError (exit 1) naming the first sample, and its key, that is not finite or
     whose position lies beyond :data:`~quadnav.limits.COORDINATE`."""
     bad = ~np.isfinite(rows)
-    bad[:, 0:3] |= np.abs(np.nan_to_num(rows[:, 0:3])) > COORDINATE.high
+    position = _COLUMNS["x"]
+    bad[:, position] |= np.abs(np.nan_to_num(rows[:, position])) > COORDINATE.high
     if not bad.any():
         return
     k, column = (int(i) for i in np.argwhere(bad)[0])
