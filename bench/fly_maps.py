@@ -27,7 +27,7 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.timing import rest_to_rest_duration
+from quadnav.trajectory.timing.segment_times import rest_to_rest_duration
 
 
 @dataclass(frozen=True)

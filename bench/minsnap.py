@@ -8,8 +8,9 @@ walk (steps of 1-3 m in random directions), and a refined RRT* plan through the 
 ``forest`` densified to 50 points (its corners kept, points added along its edges).
 On each it prints medians over repeated runs of the whole call of:
 
-* :func:`quadnav.trajectory.minsnap.minimum_snap` — the closed form (one sparse KKT solve);
-* :func:`quadnav.trajectory.minsnap_qp.minimum_snap_qp` without inequalities (the same
+* :func:`quadnav.trajectory.polynomials.minsnap.minimum_snap` — the closed form (one sparse
+  KKT solve);
+* :func:`quadnav.trajectory.polynomials.minsnap_qp.minimum_snap_qp` without inequalities (the same
   problem as a Clarabel QP) and with corridors: each segment's bounding box grown by
   0.5 m, 20 samples per segment;
 * the baseline, measured in the same run on the same waypoints and times: the course
@@ -38,9 +39,10 @@ from scipy.optimize import OptimizeResult, minimize
 
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.trajectory import Trajectory, polybasis
-from quadnav.trajectory.minsnap import minimum_snap
-from quadnav.trajectory.minsnap_qp import minimum_snap_qp
+from quadnav.trajectory import Trajectory
+from quadnav.trajectory.polynomials import basis
+from quadnav.trajectory.polynomials.minsnap import minimum_snap
+from quadnav.trajectory.polynomials.minsnap_qp import minimum_snap_qp
 from quadnav.world import load_world
 
 #: Waypoints of every case.
@@ -93,8 +95,8 @@ def slsqp_minimum_snap(waypoints: np.ndarray, times: np.ndarray, ftol: float, ma
                        ) -> tuple[float, list[OptimizeResult]]:
     """Baseline: minimum snap by SLSQP per axis, from zero, on the dense cost matrix and the
     same equality constraints. Returns the cost, m^2/s^7, and the three SciPy results."""
-    Q = polybasis.cost_matrix(times, SNAP).toarray()
-    A_sparse, b = polybasis.equality_constraints(waypoints, times, SNAP, continuity=SNAP)
+    Q = basis.cost_matrix(times, SNAP).toarray()
+    A_sparse, b = basis.equality_constraints(waypoints, times, SNAP, continuity=SNAP)
     A = A_sparse.toarray()
     results = []
     for axis in range(3):
@@ -104,7 +106,7 @@ def slsqp_minimum_snap(waypoints: np.ndarray, times: np.ndarray, ftol: float, ma
                           "jac": lambda x: A}],
             options={"ftol": ftol, "maxiter": maxiter}))
     coefficients = np.stack([r.x for r in results], axis=1).reshape(len(times), 2 * SNAP, 3)
-    return polybasis.trajectory_cost(coefficients, times, SNAP), results
+    return basis.trajectory_cost(coefficients, times, SNAP), results
 
 
 def corridor_excess(trajectory: Trajectory, boxes: np.ndarray, per_segment: int) -> float:

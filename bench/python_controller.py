@@ -47,7 +47,7 @@ from quadnav.control.se3 import SE3Gains, se3_controller
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle.params import load_params
 
 VEHICLE = load_params("tello").replace(name="tello without drag", drag=np.zeros(3))

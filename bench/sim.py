@@ -53,12 +53,18 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from quadnav.control.cascade import control, gain_arrays, new_memory
+from quadnav.control.contract import REFERENCE_POSITION, REFERENCE_YAW
 from quadnav.control.gains import Gains
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import reference_table, simulate
 from quadnav.trajectory import SafeSpace, Trajectory, TrajectorySettings, make_trajectory
 from quadnav.vehicle.dynamics import (
+    ATTITUDE,
+    POSITION,
+    RATES,
+    ROTORS,
     STATE_SIZE,
+    VELOCITY,
     VehicleArrays,
     derivative,
     hover_state,
@@ -102,9 +108,9 @@ def numpy_derivative(x: np.ndarray, rotor_target: np.ndarray, v: VehicleArrays,
     """d state / dt (17,) of :func:`quadnav.vehicle.dynamics.derivative`, in numpy: state
     ``x`` (17,), rotor speed targets (4,) rad/s, external force (3,) N, wind velocity (3,)
     m/s."""
-    qw, qx, qy, qz = x[6:10]
-    w = x[10:13]
-    rotors = x[13:17]
+    qw, qx, qy, qz = x[ATTITUDE]
+    w = x[RATES]
+    rotors = x[ROTORS]
     R = np.array([
         [1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)],
         [2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)],
@@ -114,17 +120,17 @@ def numpy_derivative(x: np.ndarray, rotor_target: np.ndarray, v: VehicleArrays,
     thrusts = v.thrust_coefficient * squared
     torque = np.array([v.allocation[1] @ thrusts, v.allocation[2] @ thrusts,
                        -v.torque_coefficient * (v.spin @ squared)])
-    drag = R @ (v.drag * (R.T @ (x[3:6] - wind)))
+    drag = R @ (v.drag * (R.T @ (x[VELOCITY] - wind)))
     acceleration = (R[:, 2] * thrusts.sum() - drag + force) / v.mass
     acceleration[2] -= v.gravity
     G = np.array([[-qx, -qy, -qz], [qw, -qz, qy], [qz, qw, -qx], [-qy, qx, qw]])
     spin_momentum = v.inertia * w
     out = np.empty(STATE_SIZE)
-    out[0:3] = x[3:6]
-    out[3:6] = acceleration
-    out[6:10] = 0.5 * G @ w
-    out[10:13] = (torque - np.cross(w, spin_momentum)) / v.inertia
-    out[13:17] = (rotor_target - rotors) / v.motor_time_constant
+    out[POSITION] = x[VELOCITY]
+    out[VELOCITY] = acceleration
+    out[ATTITUDE] = 0.5 * G @ w
+    out[RATES] = (torque - np.cross(w, spin_momentum)) / v.inertia
+    out[ROTORS] = (rotor_target - rotors) / v.motor_time_constant
     return out
 
 
@@ -136,8 +142,8 @@ def derivative_mismatch(params: VehicleParams, samples: int = 100) -> float:
     worst, out = 0.0, np.empty(STATE_SIZE)
     for _ in range(samples):
         x = rng.normal(size=STATE_SIZE)
-        x[6:10] /= np.linalg.norm(x[6:10])
-        x[13:17] = rng.uniform(0.0, params.rotor_speed_max, 4)
+        x[ATTITUDE] /= np.linalg.norm(x[ATTITUDE])
+        x[ROTORS] = rng.uniform(0.0, params.rotor_speed_max, 4)
         target = rng.uniform(0.0, params.rotor_speed_max, 4)
         force, wind = rng.normal(size=3), rng.normal(size=3)
         derivative(x, target, v, force, wind, out)
@@ -159,18 +165,18 @@ def baseline_run(trajectory: Trajectory, params: VehicleParams, gains: Gains,
     v = vehicle_arrays(params)
     g = gain_arrays(gains)
     memory = new_memory()
-    state = hover_state(params, references[0, 0:3], references[0, 9])
+    state = hover_state(params, references[0, REFERENCE_POSITION], references[0, REFERENCE_YAW])
     still = np.zeros(3)
     squared_error = 0.0
     for reference in references:
-        squared_error += float(np.sum((state[0:3] - reference[0:3]) ** 2))
+        squared_error += float(np.sum((state[POSITION] - reference[REFERENCE_POSITION]) ** 2))
         commands = control(memory, state, reference, g, v, dt)
         target = v.rotor_speed_max * np.sqrt(np.clip(commands, 0.0, 1.0))
         solution = solve_ivp(lambda _t, s, target=target: numpy_derivative(s, target, v,
                                                                           still, still),
                              (0.0, dt), state)
         state = solution.y[:, -1].copy()
-        state[6:10] /= np.linalg.norm(state[6:10])
+        state[ATTITUDE] /= np.linalg.norm(state[ATTITUDE])
     wall = time.perf_counter() - began
     return wall, steps * dt, float(np.sqrt(squared_error / steps))
 

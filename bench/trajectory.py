@@ -27,7 +27,7 @@ its ratio to the rest-to-rest bound along the trajectory's own curve, ``L / v + 
 (``2 sqrt(L / a)`` when ``L < v^2 / a``) with ``L`` the curve length (speed integrated over
 20,001 samples), the mean speed ``L / duration``, the sampled peak speed and acceleration
 norms, and the margin kept from the real blocks and the boundary off the legs: exact for
-quadnav (:func:`~quadnav.trajectory.space.trajectory_margins`), sampled every 5 mm of
+quadnav (:func:`~quadnav.trajectory.clearance.space.trajectory_margins`), sampled every 5 mm of
 chord for toppra's spline. Then a summary per contender: median and largest ratio (and
 where), median mean speed at each speed, and the median over the runs of the compute time
 relative to ``today``'s in the same run — over the course maps, then over all paths.
@@ -54,9 +54,9 @@ from quadnav.mission import MissionSettings
 from quadnav.planning import make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.planning.result import distinct
+from quadnav.trajectory.clearance.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
-from quadnav.trajectory.timing import rest_to_rest_duration
+from quadnav.trajectory.timing.segment_times import rest_to_rest_duration
 from quadnav.world import World, load_world
 from quadnav.world.builtin import world_names
 from quadnav.world.margins import point_margins

@@ -3,7 +3,7 @@ no polynomial fit) by the same closed loop as every other flight.
 
 A reference is any object with ``duration`` (s) and ``position(t)``, ``velocity(t)``,
 ``acceleration(t)`` ((N, 3) for N times, world frame, SI), ``yaw(t)`` ((N,) rad) and
-``sample(dt)`` (inherit :class:`~quadnav.trajectory.reference.Sampling` for it), for
+``sample(dt)`` (inherit :class:`~quadnav.trajectory.references.contract.Sampling` for it), for
 ``simulate`` and ``track_reference``. Use this file as a template. (The command line flies
 a plain class with ``update(t) -> flat outputs`` instead: examples/plain_trajectory.py.)
 
@@ -19,7 +19,7 @@ import numpy as np
 
 from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
-from quadnav.trajectory.reference import Sampling
+from quadnav.trajectory.references.contract import Sampling
 from quadnav.world import load_world
 
 

@@ -15,7 +15,7 @@ import sys
 
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.trajectory.generate import METHODS, TrajectorySettings
-from quadnav.trajectory.minsnap import minimum_derivative
+from quadnav.trajectory.polynomials.minsnap import minimum_derivative
 from quadnav.world import load_world
 
 

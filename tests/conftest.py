@@ -110,7 +110,7 @@ def client_ns():
 
     from djitellopy import Tello
 
-    from quadnav.hardware.emulator import djitellopy_namespace
+    from quadnav.hardware.emulator.server import djitellopy_namespace
 
     Tello.LOGGER.setLevel(logging.WARNING)
     namespace = djitellopy_namespace()

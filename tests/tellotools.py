@@ -1,7 +1,7 @@
 """Flying quadnav's Tello bridge against the emulator, for the Tello tests.
 
 djitellopy's sockets live in a network namespace private to the test process
-(:func:`~quadnav.hardware.emulator.djitellopy_namespace`, the ``client_ns`` fixture), so
+(:func:`~quadnav.hardware.emulator.server.djitellopy_namespace`, the ``client_ns`` fixture), so
 parallel workers never share port 8889. What the drone really did is read from the
 emulator: its track (world frame) and the commands it heard.
 """
@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from quadnav.hardware.bridge import BridgeSettings, Flown, fly
-from quadnav.hardware.flight_plan import FlightPlan, plan_flight
-from quadnav.hardware.netns import unavailable_reason
+from quadnav.hardware.bridge.flight import BridgeSettings, Flown, fly
+from quadnav.hardware.bridge.flight_plan import FlightPlan, plan_flight
+from quadnav.hardware.emulator.netns import unavailable_reason
 from quadnav.planning import PlannerSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import World, load_world, read_start_goal
@@ -61,7 +61,7 @@ def emulated_flight(plan: FlightPlan, client_ns, folder, mode="waypoints", scale
     a file beside ``folder`` for the bridge to read after the flight; returns what the
     bridge flew (its outcome, dead-reckoned track and the true track) and the emulator
     (stopped) once the drone has come to rest."""
-    from quadnav.hardware.emulator import TelloEmulator
+    from quadnav.hardware.emulator.server import TelloEmulator
 
     folder = Path(folder)
     truth = folder.with_name(f"{folder.name}-emulator-truth.csv")

@@ -27,7 +27,7 @@ from quadnav.batch.grid import parse_spec, read_spec
 from quadnav.batch.stages import StageCache
 from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
 from quadnav.control.registry import controller_gains
-from quadnav.trajectory.space import reference_margins, trajectory_margins
+from quadnav.trajectory.clearance.space import reference_margins, trajectory_margins
 from quadnav.tune.sets import read_set, set_items
 from quadnav.vehicle.params import load_params
 from quadnav.world import load_world

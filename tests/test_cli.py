@@ -19,9 +19,8 @@ from clitools import QUADNAV, assert_user_error, run, run_here
 
 from quadnav import __version__
 from quadnav.cli.commands import COMMANDS
-from quadnav.cli.launch import _StopHandler, report_stop
 from quadnav.cli.main import build_parser
-from quadnav.signals import Stopped
+from quadnav.signals import Stopped, StopSignalHandler, report_stop
 from quadnav.world import read_map
 
 
@@ -306,15 +305,15 @@ def test_an_import_cut_short_by_a_stop_signal_is_a_stop(capsys):
 def test_an_import_that_lost_the_stop_behind_it_is_still_a_stop(capsys):
     """numpy's C-level imports (PyCapsule_Import) turn a stop raised while they run into an
     ImportError that no longer names it as its cause: the stop the handlers raised is."""
-    handler = _StopHandler()
+    handler = StopSignalHandler()
     with pytest.raises(Stopped):
-        handler(signal.SIGTERM, None)
+        handler.handle(signal.SIGTERM, None)
     lost = ImportError("numpy.core.multiarray failed to import")
     assert lost.__cause__ is None and lost.__context__ is None
     assert report_stop(lost, handler.raised) == 143
     assert capsys.readouterr().err == "quadnav: stopped by SIGTERM\n"
     with pytest.raises(ImportError, match="failed to import"):
-        report_stop(lost, _StopHandler().raised)  # no stop was raised: a real ImportError
+        report_stop(lost, StopSignalHandler().raised)  # no stop was raised: a real ImportError
 
 
 def test_stop_signals_wait_while_numba_holds_its_compiler_lock():

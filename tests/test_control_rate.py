@@ -31,7 +31,7 @@ from quadnav.mission import MissionSettings
 from quadnav.sim import loop
 from quadnav.sim.settings import SimSettings
 from quadnav.tracking import track_reference
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle import quaternion
 from quadnav.vehicle.dynamics import hover_state, vehicle_arrays
 from quadnav.vehicle.params import load_params, preset_names

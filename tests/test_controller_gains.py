@@ -27,7 +27,7 @@ from quadnav.mission import MissionSettings
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle.params import load_params
 
 TELLO = load_params("tello")

@@ -20,14 +20,14 @@ from quadnav.errors import QuadnavError
 from quadnav.planning import PlannerSettings, PlanningProblem, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.trajectory import Trajectory, ppoly_from_ascending
-from quadnav.trajectory.collision import (
+from quadnav.trajectory.clearance.collision import (
     Collision,
     collisions,
     first_collision,
     insert_points,
     refine_until_free,
 )
-from quadnav.trajectory.corridor import CLEARANCE, safe_corridors
+from quadnav.trajectory.clearance.corridor import CLEARANCE, safe_corridors
 from quadnav.world import World, load_world, read_map
 
 SPEED = 1.0  # m/s, for the test's cubic splines

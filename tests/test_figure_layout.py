@@ -16,8 +16,8 @@ from matplotlib.patches import Rectangle
 from mpl_toolkits.mplot3d import Axes3D
 
 from quadnav.cli.main import main
-from quadnav.hardware.flight_plan import plan_flight
-from quadnav.hardware.track_figure import track_figure
+from quadnav.hardware.bridge.flight_plan import plan_flight
+from quadnav.hardware.bridge.track_figure import track_figure
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings, get_planner, make_problem
 from quadnav.report.run_writer import write_run

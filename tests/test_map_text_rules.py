@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from quadnav.errors import MapError, MapWarning
 from quadnav.kinodynamic.world2d import parse_map2d
 from quadnav.trajectory.pathfile import read_path_csv
-from quadnav.trajectory.sampled import read_reference_file
+from quadnav.trajectory.references.sampled import read_reference_file
 from quadnav.world import parse_map
 from quadnav.world.startgoal import parse_start_goal
 

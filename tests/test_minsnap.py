@@ -11,8 +11,8 @@ from quadnav.errors import QuadnavError
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
 from quadnav.trajectory import Trajectory, ppoly_from_ascending
-from quadnav.trajectory.minsnap import minimum_derivative, minimum_snap, snap_cost
-from quadnav.trajectory.minsnap_qp import minimum_snap_qp
+from quadnav.trajectory.polynomials.minsnap import minimum_derivative, minimum_snap, snap_cost
+from quadnav.trajectory.polynomials.minsnap_qp import minimum_snap_qp
 from quadnav.world import load_world
 
 

@@ -23,7 +23,7 @@ from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.tracking import track_reference
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world import load_world
 
@@ -131,7 +131,7 @@ def test_rotorpys_se3control_agrees_with_quadnavs_se3_on_a_public_course_map(sha
     assert mission.success and mission.flight.rms_tracking_error < 0.1
     ours = simulate(mission.trajectory, TELLO, world=world, settings=mission.settings.sim,
                     controller=se3_controller(ROTORPY_GAINS))
-    assert np.abs(ours.states[:, 0:3] - mission.flight.states[:, 0:3]).max() < AGREEMENT
+    assert np.abs(ours.position - mission.flight.position).max() < AGREEMENT
 
 
 def test_speeds_thrusts_and_moments_of_one_controller_fly_one_flight():
@@ -168,8 +168,8 @@ def test_a_controller_sees_rotorpys_state_and_flat_outputs(controllers):
     t, state, flat = seen.calls[1500]
     assert t == pytest.approx(1500 / 500.0)
     k = 1500 // 5  # the record keeps every fifth step at 100 Hz
-    assert np.allclose(state["x"], flight.states[k, 0:3]) and state["wind"].tolist() == [0] * 3
-    q = flight.states[k, 6:10]
+    assert np.allclose(state["x"], flight.position[k]) and state["wind"].tolist() == [0] * 3
+    q = flight.attitude[k]
     assert np.allclose(state["q"], [q[1], q[2], q[3], q[0]])  # (i, j, k, w)
     assert set(state) == {"x", "v", "q", "w", "wind", "rotor_speeds"}
     assert set(flat) == {"x", "x_dot", "x_ddot", "x_dddot", "x_ddddot", "yaw", "yaw_dot"}

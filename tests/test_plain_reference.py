@@ -20,8 +20,8 @@ from quadnav.errors import QuadnavError
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.plugins import PluginError, literal_arrays
 from quadnav.sim.simulate import reference_table
-from quadnav.trajectory.plain import FlatOutputReference
-from quadnav.trajectory.references import load_reference
+from quadnav.trajectory.references.builtin import load_reference
+from quadnav.trajectory.references.plain import FlatOutputReference
 from quadnav.vehicle.quaternion import euler_angles
 from quadnav.world import load_world
 from quadnav.world.margins import point_margins

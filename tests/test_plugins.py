@@ -16,7 +16,7 @@ from quadnav.planning import make_problem, plan, planner_names, register_planner
 from quadnav.planning.registry import PLANNERS
 from quadnav.plugins import Registry
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
-from quadnav.trajectory.minsnap import minimum_derivative
+from quadnav.trajectory.polynomials.minsnap import minimum_derivative
 from quadnav.world import load_world
 
 

@@ -76,7 +76,7 @@ def test_the_plain_python_flight_of_the_build_flies_and_numba_serves_its_step(tm
     from quadnav.control.registry import make_controller
     from quadnav.sim.flight import Ending
     from quadnav.sim.simulate import simulate
-    from quadnav.trajectory.references import load_reference
+    from quadnav.trajectory.references.builtin import load_reference
     from quadnav.vehicle.params import load_params
 
     tello = load_params("tello")

@@ -19,16 +19,16 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.errors import PlanningWarning, QuadnavError
-from quadnav.hardware.flight_plan import plan_flight
+from quadnav.hardware.bridge.flight_plan import plan_flight
 from quadnav.kinodynamic import KinoSettings
 from quadnav.kinodynamic.quadrotor import plan_quadrotor
 from quadnav.mission import MissionSettings, fly_mission, warn_if_margin_too_small
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.sim.envelope import flyable_trajectory, vehicle_limits
+from quadnav.trajectory.clearance.space import SafeSpace
+from quadnav.trajectory.envelope import flyable_trajectory, vehicle_limits
 from quadnav.trajectory.feasibility import feasibility
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
-from quadnav.trajectory.space import SafeSpace
 from quadnav.vehicle.params import load_params
 from quadnav.world import World, load_world
 

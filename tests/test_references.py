@@ -9,11 +9,9 @@ import numpy as np
 import pytest
 
 from quadnav.errors import MapError, QuadnavError
-from quadnav.trajectory.export import mp_csv, trajectory_csv
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import YawMode
-from quadnav.trajectory.reference import Reference, grid_times, sample_times, samples_at
-from quadnav.trajectory.references import (
+from quadnav.trajectory.references.builtin import (
     ShapedReference,
     StepReference,
     build_reference,
@@ -21,8 +19,10 @@ from quadnav.trajectory.references import (
     load_reference,
     reference_names,
 )
-from quadnav.trajectory.sampled import COURSE_MP_RATE, MP_FORMAT, TABLE_FORMAT
-from quadnav.trajectory.timelaw import PhaseLaw
+from quadnav.trajectory.references.contract import Reference, grid_times, sample_times, samples_at
+from quadnav.trajectory.references.export import mp_csv, trajectory_csv
+from quadnav.trajectory.references.sampled import COURSE_MP_RATE, MP_FORMAT, TABLE_FORMAT
+from quadnav.trajectory.references.timelaw import PhaseLaw
 
 DEFAULTS = {
     "hover": "hover:height=1,duration=5",

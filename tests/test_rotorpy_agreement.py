@@ -27,8 +27,8 @@ from quadnav.control.se3 import SE3Gains, se3_controller
 from quadnav.sim.flight import Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
-from quadnav.trajectory.reference import Reference
-from quadnav.trajectory.references import build_reference
+from quadnav.trajectory.references.builtin import build_reference
+from quadnav.trajectory.references.contract import Reference
 from quadnav.vehicle.dynamics import STATE_SIZE, derivative, vehicle_arrays
 from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotorpy_params import rotor_layout, vehicle_from_rotorpy
@@ -147,7 +147,7 @@ def distances(ours: np.ndarray, theirs: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("case", list(CASES))
 def test_a_flight_agrees_with_rotorpys_simulator(case):
     ours, theirs = flights(case)
-    apart = distances(ours.states[:, 0:3], theirs)
+    apart = distances(ours.position, theirs)
     assert len(apart) > 0.99 * ours.t[-1] * RATE  # the whole flight, sample by sample
     # a real flight, well within the rotors' range (where both mixers are exact)
     assert ours.ending.name == "COMPLETED" and 0.02 < ours.rms_tracking_error < 0.5
@@ -160,5 +160,5 @@ def test_the_agreement_tells_the_rotor_drag_apart():
     without it is more than ten times the tolerance from rotorpy's flight with it."""
     without = vehicle_from_rotorpy(CRAZYFLIE_WITHOUT_AERO, "crazyflie")
     ours = quadnav_flight(without, SE3Control(CRAZYFLIE), build_reference(REFERENCE))
-    apart = distances(ours.states[:, 0:3], flights("crazyflie")[1])
+    apart = distances(ours.position, flights("crazyflie")[1])
     assert np.sqrt(np.mean(apart ** 2)) > 10 * RMS_TOLERANCE

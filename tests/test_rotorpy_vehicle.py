@@ -14,7 +14,7 @@ from quadnav.batch.grid import parse_spec, read_spec
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.missionconfig import spread_factors
-from quadnav.sim.envelope import vehicle_limits
+from quadnav.trajectory.envelope import vehicle_limits
 from quadnav.vehicle.params import load_params
 from quadnav.vehicle.rotorpy_params import body_box, rotor_layout, vehicle_from_rotorpy
 

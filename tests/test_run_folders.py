@@ -26,7 +26,7 @@ from clitools import QUADNAV
 from quadnav.cli.launch import stop_again
 from quadnav.cli.main import main
 from quadnav.errors import QuadnavError
-from quadnav.runfolder import STAGING_PREFIX, _SignalGate, check_output_folder, replaced_folder
+from quadnav.runfolder import STAGING_PREFIX, _signal_gate, check_output_folder, replaced_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.signals import Stopped
 
@@ -326,18 +326,18 @@ def test_stop_signals_while_the_files_move_in_take_effect_after_it(python_handle
 
     previous = signal.signal(signal.SIGTERM, stop)  # as the console script sets it
     try:
-        gate = _SignalGate(guard=guarded.__code__)
+        gate = _signal_gate(guard=guarded.__code__)
         signal.raise_signal(signal.SIGTERM)
         signal.raise_signal(signal.SIGINT)  # delivered and held: nothing raised
         assert gate.held == [signal.SIGTERM, signal.SIGINT]
         with pytest.raises(Stopped):
-            gate.open()  # the body begins: the held signals go through
+            gate.let_go()  # the body begins: the held signals go through
         with pytest.raises(KeyboardInterrupt):
             signal.raise_signal(signal.SIGINT)
-        gate._handle(signal.SIGINT, guarded())  # handled in the guarded code: held
+        gate.handle(signal.SIGINT, guarded())  # handled in the guarded code: held
         assert gate.held == [signal.SIGINT]
         with pytest.raises(KeyboardInterrupt):
-            gate.release()
+            gate.restore()
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
         assert signal.getsignal(signal.SIGTERM) is stop
     finally:

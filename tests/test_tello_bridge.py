@@ -33,16 +33,8 @@ from tellotools import (
 from quadnav.cli.tello_fly_command import exit_code, ipv4, percent, tello_speed
 from quadnav.hardware import sdk
 from quadnav.hardware.arc import Arc
-from quadnav.hardware.bridge import (
-    GOAL_TOLERANCE,
-    LANDING_TOLERANCE,
-    BridgeSettings,
-    Status,
-    fly,
-    landed,
-)
-from quadnav.hardware.curves import TOLERANCE_CM, Curve
-from quadnav.hardware.dead_reckoning import (
+from quadnav.hardware.bridge.curves import TOLERANCE_CM, Curve
+from quadnav.hardware.bridge.dead_reckoning import (
     HALF_UNIT,
     MOVE_VARIANCE,
     DeadReckoning,
@@ -51,16 +43,24 @@ from quadnav.hardware.dead_reckoning import (
     step_bound,
     step_slack,
 )
-from quadnav.hardware.flight_plan import (
+from quadnav.hardware.bridge.flight import (
+    GOAL_TOLERANCE,
+    LANDING_TOLERANCE,
+    BridgeSettings,
+    Status,
+    fly,
+    landed,
+)
+from quadnav.hardware.bridge.flight_plan import (
     TAKEOFF_HEIGHT,
     TRACKING_ALLOWANCE,
     SavedPlan,
     plan_flight,
 )
-from quadnav.hardware.frames import TakeoffFrame, body_to_map, map_to_body, to_cm, to_m
-from quadnav.hardware.geofence import Geofence, GeofenceError
-from quadnav.hardware.lost_link import LostLinkBound
-from quadnav.hardware.moves import (
+from quadnav.hardware.bridge.frames import TakeoffFrame, body_to_map, map_to_body, to_cm, to_m
+from quadnav.hardware.bridge.geofence import Geofence, GeofenceError
+from quadnav.hardware.bridge.lost_link import LostLinkBound
+from quadnav.hardware.bridge.moves import (
     DETOUR_CM,
     GO_MAX_CM,
     Move,
@@ -69,7 +69,7 @@ from quadnav.hardware.moves import (
     go_speed,
     is_long_enough,
 )
-from quadnav.hardware.rc import (
+from quadnav.hardware.bridge.rc import (
     RC_FULL_SPEED,
     StickRounder,
     stick_values,
@@ -79,7 +79,7 @@ from quadnav.hardware.rc import (
 from quadnav.planning import PlannerSettings
 from quadnav.runs import read_run
 from quadnav.trajectory.generate import TrajectorySettings
-from quadnav.trajectory.sampled import read_reference_file
+from quadnav.trajectory.references.sampled import read_reference_file
 from quadnav.world import World, load_world
 from quadnav.world.placement import format_point
 

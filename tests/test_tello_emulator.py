@@ -24,13 +24,14 @@ from djitellopy import Tello, TelloException
 
 from quadnav.errors import QuadnavError
 from quadnav.hardware import sdk
-from quadnav.hardware.emulated_drone import (
+from quadnav.hardware.emulator.drone import (
     ACCELERATION,
     TAKEOFF_HEIGHT,
     Arc,
     SpeedProfile,
 )
-from quadnav.hardware.emulator import (
+from quadnav.hardware.emulator.netns import NetNamespace, peer_address, unavailable_reason
+from quadnav.hardware.emulator.server import (
     ALREADY_FLYING,
     AUTO_LAND_AFTER,
     AUTO_LANDING,
@@ -42,7 +43,6 @@ from quadnav.hardware.emulator import (
     TelloEmulator,
     check_host,
 )
-from quadnav.hardware.netns import NetNamespace, peer_address, unavailable_reason
 
 NO_NETNS = unavailable_reason()
 needs_netns = pytest.mark.skipif(NO_NETNS is not None, reason=NO_NETNS or "")

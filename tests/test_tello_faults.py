@@ -1,7 +1,7 @@
 """What each fault leads to when the bridge flies a Tello: the drone is brought down inside
 the geofence, and the message and the exit code say what happened.
 
-Faults are injected into the emulator (:class:`~quadnav.hardware.emulator.Faults`) under the
+Faults are injected into the emulator (:class:`~quadnav.hardware.emulator.server.Faults`) under the
 real djitellopy client (see :mod:`tellotools`); stop signals go to a real ``quadnav tello
 fly`` process, or (for the handler itself) to this one.
 """
@@ -32,7 +32,7 @@ from tellotools import (
 )
 
 from quadnav.cli.tello_fly_command import exit_code
-from quadnav.hardware.bridge import (
+from quadnav.hardware.bridge.flight import (
     LANDING_TOLERANCE,
     BridgeSettings,
     RcModeError,
@@ -40,13 +40,12 @@ from quadnav.hardware.bridge import (
     fly,
     rc_pace,
 )
-from quadnav.hardware.emulator import Faults, TelloEmulator
-from quadnav.hardware.geofence import Geofence
-from quadnav.hardware.lost_link import HOLD, LostLinkBound, run_length, safe_speed
-from quadnav.hardware.netns import NetNamespace
-from quadnav.hardware.rc import stick_velocity
-from quadnav.hardware.stop_signals import StopSignals, signal_name
-from quadnav.signals import Stopped
+from quadnav.hardware.bridge.geofence import Geofence
+from quadnav.hardware.bridge.lost_link import HOLD, LostLinkBound, run_length, safe_speed
+from quadnav.hardware.bridge.rc import stick_velocity
+from quadnav.hardware.emulator.netns import NetNamespace
+from quadnav.hardware.emulator.server import Faults, TelloEmulator
+from quadnav.signals import Stopped, StopSignalHandler, signal_name
 from quadnav.world import World
 
 #: One worker flies this module's shared flights (each once, not once per worker).
@@ -112,7 +111,7 @@ def test_rc_mode_refuses_a_plan_no_safe_stick_can_follow(course, tmp_path):
                                                (signal.SIGTERM, Stopped)])
 def test_the_first_stop_signal_raises_and_later_ones_wait(first, raised):
     before = [signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)]
-    with StopSignals() as signals:
+    with StopSignalHandler(hold_after_first=True) as signals:
         with pytest.raises(raised) as caught:
             signal.raise_signal(first)
             time.sleep(5)  # the handler raises long before
@@ -132,7 +131,7 @@ def test_the_first_stop_signal_raises_and_later_ones_wait(first, raised):
     (Status.INTERRUPTED, signal.SIGINT, 130), (Status.INTERRUPTED, signal.SIGTERM, 143),
     (Status.INTERRUPTED, signal.SIGHUP, 129)])
 def test_exit_codes(status, signum, code):
-    from quadnav.hardware.bridge import Outcome
+    from quadnav.hardware.bridge.flight import Outcome
 
     assert exit_code(Outcome(status, "", signum)) == code
 

@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 from tellotools import assert_on_the_floor, emulated_flight, needs_netns
 
-from quadnav.hardware.bridge import GOAL_TOLERANCE, BridgeSettings, RcModeError, Status, fly
-from quadnav.hardware.flight_plan import TAKEOFF_HEIGHT, FlightPlan, plan_flight
-from quadnav.hardware.geofence import GeofenceError
-from quadnav.hardware.lost_link import LostLinkBound
-from quadnav.hardware.moves import MoveError
-from quadnav.hardware.rc import stick_velocity
+from quadnav.hardware.bridge.flight import GOAL_TOLERANCE, BridgeSettings, RcModeError, Status, fly
+from quadnav.hardware.bridge.flight_plan import TAKEOFF_HEIGHT, FlightPlan, plan_flight
+from quadnav.hardware.bridge.geofence import GeofenceError
+from quadnav.hardware.bridge.lost_link import LostLinkBound
+from quadnav.hardware.bridge.moves import MoveError
+from quadnav.hardware.bridge.rc import stick_velocity
 from quadnav.planning import PlannerSettings
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.world import World

@@ -26,10 +26,10 @@ from tellotools import (
 )
 
 from quadnav.cli.main import main
-from quadnav.hardware.bridge import BridgeSettings
-from quadnav.hardware.emulator import TelloEmulator
-from quadnav.hardware.netns import NetNamespace
-from quadnav.hardware.run_record import planned_route, tello_run_content
+from quadnav.hardware.bridge.flight import BridgeSettings
+from quadnav.hardware.bridge.run_record import planned_route, tello_run_content
+from quadnav.hardware.emulator.netns import NetNamespace
+from quadnav.hardware.emulator.server import TelloEmulator
 from quadnav.planning.result import nearest_on_polyline
 from quadnav.report.html_report import CAPTIONS
 from quadnav.report.run_writer import write_run

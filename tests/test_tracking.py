@@ -13,7 +13,7 @@ from quadnav.sim.settings import SimSettings
 from quadnav.sim.step_response import step_response
 from quadnav.tracking import track_reference, track_world
 from quadnav.trajectory.generate import make_trajectory
-from quadnav.trajectory.references import build_reference
+from quadnav.trajectory.references.builtin import build_reference
 from quadnav.vehicle.params import load_params
 
 

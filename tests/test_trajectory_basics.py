@@ -9,10 +9,10 @@ from numpy.polynomial import Polynomial
 from quadnav.errors import QuadnavError
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.trajectory.cubic import cubic_spline
-from quadnav.trajectory.minsnap import minimum_derivative
-from quadnav.trajectory.quintic import quintic_c2, quintic_segments
-from quadnav.trajectory.timing import (
+from quadnav.trajectory.polynomials.cubic import cubic_spline
+from quadnav.trajectory.polynomials.minsnap import minimum_derivative
+from quadnav.trajectory.polynomials.quintic import quintic_c2, quintic_segments
+from quadnav.trajectory.timing.segment_times import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
     optimize_times,

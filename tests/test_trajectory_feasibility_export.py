@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from quadnav.errors import QuadnavError
-from quadnav.trajectory.cubic import cubic_spline
-from quadnav.trajectory.export import CSV_HEADER, mp_csv, trajectory_csv
 from quadnav.trajectory.feasibility import GRAVITY, Limits, feasibility, quantities
 from quadnav.trajectory.model import YawMode
-from quadnav.trajectory.quintic import quintic_c2
-from quadnav.trajectory.reference import samples_at
-from quadnav.trajectory.timing import trapezoidal_times
+from quadnav.trajectory.polynomials.cubic import cubic_spline
+from quadnav.trajectory.polynomials.quintic import quintic_c2
+from quadnav.trajectory.references.contract import samples_at
+from quadnav.trajectory.references.export import CSV_HEADER, mp_csv, trajectory_csv
+from quadnav.trajectory.timing.segment_times import trapezoidal_times
 from quadnav.world import World, load_world
 
 #: A rest-to-rest quintic of L = 2 m in T = 2.5 s along x: s(tau) = 10 tau^3 - 15 tau^4 +

@@ -12,9 +12,9 @@ from publicmaps import MAPS, course_query
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.trajectory.collision import first_collision
+from quadnav.trajectory.clearance.collision import first_collision
+from quadnav.trajectory.clearance.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
 
 
 @pytest.mark.parametrize("name", MAPS)

@@ -8,12 +8,12 @@ import pytest
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.planning import PlannerSettings, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.trajectory.collision import first_collision
+from quadnav.trajectory.clearance.collision import first_collision
+from quadnav.trajectory.clearance.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
-from quadnav.trajectory.minsnap import minimum_snap
 from quadnav.trajectory.model import YawMode
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
-from quadnav.trajectory.timing import optimize_times, trapezoidal_times
+from quadnav.trajectory.polynomials.minsnap import minimum_snap
+from quadnav.trajectory.timing.segment_times import optimize_times, trapezoidal_times
 from quadnav.world import load_world
 
 

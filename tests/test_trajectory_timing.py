@@ -19,9 +19,9 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.mission import MissionSettings
 from quadnav.planning import make_problem, plan
 from quadnav.planning.refine import refine
+from quadnav.trajectory.clearance.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
-from quadnav.trajectory.speed_profile import fastest_speeds, travel_times
+from quadnav.trajectory.timing.speed_profile import fastest_speeds, travel_times
 from quadnav.world import load_world
 from quadnav.world.builtin import world_names
 
@@ -30,7 +30,7 @@ ACCELERATION = 3.0
 #: Samples along a trajectory for its length, peaks and progress.
 SAMPLES = 20_000
 #: How far inside the margin the collision refinement may leave a curve, m: it checks
-#: chords at most 1 mm from it (quadnav.trajectory.collision).
+#: chords at most 1 mm from it (quadnav.trajectory.clearance.collision).
 CHECK_TOLERANCE = 0.002
 #: Most any one map and speed may take over the bound (see the README: the legs out of
 #: the margin stop twice, and many sharp turns at 3 m/s slow down).

@@ -296,9 +296,9 @@ def tello_truth(tmp_path_factory):
     true track 0.4 m beside it."""
     from tellotools import planned_room
 
-    from quadnav.hardware.bridge import BridgeSettings, Flown, Outcome, Status
-    from quadnav.hardware.dead_reckoning import Estimate
-    from quadnav.hardware.run_record import tello_run_content
+    from quadnav.hardware.bridge.dead_reckoning import Estimate
+    from quadnav.hardware.bridge.flight import BridgeSettings, Flown, Outcome, Status
+    from quadnav.hardware.bridge.run_record import tello_run_content
 
     t, x = np.linspace(0.0, 10.0, 21), np.linspace(0.5, 3.5, 21)
     track = np.column_stack([t, x, np.full(21, 1.0), np.full(21, 0.8)])

@@ -3,9 +3,9 @@
 Plan with RRT* (or an OMPL planner, or one of your own), shortcut and smooth the path, make
 a minimum-snap trajectory that keeps the margin everywhere but on the legs out of it,
 check that the vehicle can fly it (or, instead, build a trajectory class of your own from
-the path and sample it: :mod:`quadnav.trajectory.plain`), and fly it in simulation against
-the real (uninflated) map. :meth:`Mission.metrics` summarises the outcome for reports and
-``metrics.json``, with the margin kept on and off the legs measured exactly.
+the path and sample it: :mod:`quadnav.trajectory.references.plain`), and fly it in
+simulation against the real (uninflated) map. :meth:`Mission.metrics` summarises the
+outcome for reports and ``metrics.json``, with the margin kept on and off the legs measured exactly.
 """
 
 from __future__ import annotations
@@ -37,26 +37,26 @@ from quadnav.planning.refine import refine
 from quadnav.planning.result import path_length
 from quadnav.planning.stall import StallRule
 from quadnav.plugins import parse_spec
-from quadnav.sim.envelope import flyable_trajectory
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
+from quadnav.trajectory.clearance.space import (
+    SafeSpace,
+    reference_margins,
+    windowed_margins,
+    within_window,
+)
+from quadnav.trajectory.envelope import flyable_trajectory
 from quadnav.trajectory.generate import TrajectorySettings
 from quadnav.trajectory.model import Trajectory, YawMode
-from quadnav.trajectory.plain import (
+from quadnav.trajectory.references.plain import (
     FlatOutputReference,
     check_ends,
     flat_reference,
     leg_window,
     load_trajectory_class,
 )
-from quadnav.trajectory.space import (
-    SafeSpace,
-    reference_margins,
-    windowed_margins,
-    within_window,
-)
-from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
+from quadnav.trajectory.timing.segment_times import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.margins import segment_box_margins
 from quadnav.world.model import World
@@ -97,8 +97,8 @@ class MissionSettings:
         trajectory: generator and limits (``v_max`` is the top speed).
         fastest: ignore the trajectory's speed and acceleration limits and fly as fast as
             the vehicle can follow on the path: its own limits
-            (:func:`~quadnav.sim.envelope.vehicle_limits`), lowered until every limit
-            holds (:func:`~quadnav.sim.envelope.flyable_trajectory`; ``--speed max``).
+            (:func:`~quadnav.trajectory.envelope.vehicle_limits`), lowered until every limit
+            holds (:func:`~quadnav.trajectory.envelope.flyable_trajectory`; ``--speed max``).
         vehicle: the simulated quadrotor, as the trajectory and the controller know it.
         gains: the controller's own gains (the cascade's
             :class:`~quadnav.control.gains.Gains`, SE(3)'s
@@ -120,7 +120,7 @@ class MissionSettings:
             its model, unaware of the difference.
         reference: a trajectory class of your own that replaces the trajectory stage,
             ``module:Class`` or ``path/to/file.py:Class`` with literal keyword arguments
-            (:mod:`quadnav.trajectory.plain`): built from the refined path (as ``points``
+            (:mod:`quadnav.trajectory.references.plain`): built from the refined path (as ``points``
             when it takes them), sampled at the control rate and flown; it must start at
             the start and end at the goal (within ``sim.goal_tolerance``). ``trajectory``
             and ``fastest`` then do not apply. None: quadnav's trajectory stage.
@@ -166,7 +166,7 @@ class MissionSettings:
     @property
     def limit_gains(self) -> Gains:
         """The cascade gains whose saturations (thrust, tilt, rates, speed) bound what the
-        trajectory may ask (:func:`~quadnav.sim.envelope.vehicle_limits`): the flown gains
+        trajectory may ask (:func:`~quadnav.trajectory.envelope.vehicle_limits`): the flown gains
         when the cascade flies, else the cascade's tuned for ``vehicle``."""
         gains = self.flown_gains
         return gains if isinstance(gains, Gains) else controller_gains(DEFAULT_CONTROLLER,
@@ -281,7 +281,7 @@ def measure_flight(world: World, trajectory: Trajectory | FlatOutputReference, f
                    settings: SimSettings, margin: float) -> dict:
     """The flight's part of :meth:`Mission.metrics`: the margin (per axis, m) kept from the
     real blocks and the boundary, measured exactly, by the trajectory
-    (:func:`~quadnav.trajectory.space.reference_margins`) and by the flight,
+    (:func:`~quadnav.trajectory.clearance.space.reference_margins`) and by the flight,
     off the legs and on them (None without legs), how much less than the asked ``margin``
     m the flight kept off the legs (:func:`margin_shortfall`) and when it kept the least
     (:func:`least_margin_time`), and :func:`flight_metrics`. The flown track is taken as
@@ -454,7 +454,7 @@ def make_reference(problem: PlanningProblem, path: FloatArray, settings: Mission
                    ) -> tuple[Trajectory | FlatOutputReference, MissionSettings]:
     """The reference flown along ``path`` (N, 3) m, a solved plan's, and ``settings`` with
     the trajectory settings that made it: quadnav's trajectory
-    (:func:`~quadnav.sim.envelope.flyable_trajectory`, made for ``settings.vehicle`` with
+    (:func:`~quadnav.trajectory.envelope.flyable_trajectory`, made for ``settings.vehicle`` with
     :attr:`~MissionSettings.limit_gains`), or a trajectory class of your own sampled
     (:func:`path_reference`).
 
@@ -490,7 +490,7 @@ def path_reference(problem: PlanningProblem, path: FloatArray, settings: Mission
                    ) -> FlatOutputReference:
     """The trajectory class ``settings.reference`` built from ``path`` (N, 3) m, sampled
     at the control rate for ``settings.reference_duration`` s (or as long as it says),
-    with its legs' times (:func:`~quadnav.trajectory.plain.leg_window`).
+    with its legs' times (:func:`~quadnav.trajectory.references.plain.leg_window`).
 
     Raises:
         QuadnavError: a class that cannot be loaded or built (exit 2).

@@ -22,72 +22,27 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import signal
 import tempfile
-import threading
 from collections.abc import Collection
 from pathlib import Path
-from types import CodeType, FrameType, TracebackType
+from types import CodeType, TracebackType
 
 from quadnav.errors import DISK_FULL, QuadnavError, WriteError
-from quadnav.signals import STOP_SIGNALS
+from quadnav.signals import StopSignalHandler
 
 #: Start of a staging folder's name; the process id and a random suffix follow.
 STAGING_PREFIX = ".quadnav-partial-"
 _STAGING_NAME = re.compile(re.escape(STAGING_PREFIX) + r"([1-9][0-9]*)-[a-z0-9_]{8}")
 
 
-class _SignalGate:
-    """While installed, Ctrl-C, SIGTERM and SIGHUP pass through to their handlers when
-    ``holding`` is false and are held back when it is true, or when they are handled as
-    the function with the code ``guard`` begins (set ``holding`` with a plain assignment:
-    Python runs signal handlers only as a function begins, after a call and at a loop's
-    turn, so nothing slips in). :meth:`release` restores the handlers and delivers the
-    first signal held."""
-
-    def __init__(self, guard: CodeType | None = None) -> None:
-        self.holding = True
-        self.held: list[int] = []
-        self._guard = guard
-        self._previous: dict[int, object] = {}
-        if threading.current_thread() is not threading.main_thread():
-            return  # handlers can only be set in the main thread; nothing to hold there
-        try:
-            for signum in STOP_SIGNALS:
-                previous = signal.getsignal(signum)
-                if previous not in (signal.SIG_IGN, None):
-                    self._previous[signum] = signal.signal(signum, self._handle)
-        except BaseException:  # a stop before all were set: put those set back
-            self.release()
-            raise
-
-    def _handle(self, signum: int, frame: FrameType | None) -> None:
-        if self.holding or (frame is not None and frame.f_code is self._guard):
-            self.held.append(signum)
-        else:
-            self._pass_on(signum, frame)
-
-    def _pass_on(self, signum: int, frame: FrameType | None) -> None:
-        previous = self._previous[signum]
-        if callable(previous):
-            previous(signum, frame)
-        else:  # SIG_DFL: the default action, e.g. SIGTERM ends the process
-            signal.signal(signum, previous)
-            signal.raise_signal(signum)
-
-    def open(self) -> None:
-        """Let signals through, first those held so far."""
-        held, self.held = self.held, []
-        self.holding = False
-        for signum in held:
-            self._pass_on(signum, None)
-
-    def release(self) -> None:
-        """Restore the handlers; deliver the first signal held back."""
-        for signum, previous in self._previous.items():
-            signal.signal(signum, previous)
-        if self.held:
-            signal.raise_signal(self.held[0])
+def _signal_gate(guard: CodeType | None = None) -> StopSignalHandler:
+    """A handler, installed, that holds every stop signal back (``guard``: see
+    :class:`~quadnav.signals.StopSignalHandler`) and passes them on, in order, to the
+    handlers it replaced once it lets go (:meth:`~quadnav.signals.StopSignalHandler.let_go`)
+    or is restored (the first held)."""
+    gate = StopSignalHandler(True, guard=guard, pass_on=True)
+    gate.install()
+    return gate
 
 
 def _nearest_existing(folder: Path) -> Path:
@@ -122,13 +77,13 @@ def check_output_folder(folder: str | Path) -> Path:
     QuadnavError (one line) if not. Leaves nothing behind."""
     folder = Path(folder)
     existing = _nearest_existing(folder)
-    gate = _SignalGate()  # a stop between making the probe and removing it waits
+    gate = _signal_gate()  # a stop between making the probe and removing it waits
     try:
         os.rmdir(_make_staging(existing))
     except OSError as error:
         raise _cannot_write(folder, existing, error) from None
     finally:
-        gate.release()
+        gate.restore()
     return folder
 
 
@@ -240,10 +195,10 @@ class FolderReplacement:
         self.keep_partial = keep_partial
         self.staging: Path | None = None
         self._created: list[Path] = []
-        self._gate: _SignalGate | None = None
+        self._gate: StopSignalHandler | None = None
 
     def __enter__(self) -> Path:
-        self._gate = _SignalGate(guard=FolderReplacement.__exit__.__code__)
+        self._gate = _signal_gate(guard=FolderReplacement.__exit__.__code__)
         try:
             self._created = _create(self.folder)
             _sweep(self.folder)
@@ -251,7 +206,7 @@ class FolderReplacement:
                 self.staging = _make_staging(self.folder)
             except OSError as error:
                 raise _cannot_write(self.folder, self.folder, error) from None
-            self._gate.open()  # a stop held while setting up is raised here
+            self._gate.let_go()  # a stop held while setting up is raised here
         except BaseException:
             self._gate.holding = True
             self._finish(move=False)
@@ -279,4 +234,4 @@ class FolderReplacement:
             if self.staging is not None:
                 shutil.rmtree(self.staging, ignore_errors=True)
             _remove_empty(self._created)
-            self._gate.release()
+            self._gate.restore()

@@ -48,8 +48,8 @@ from quadnav.runcheck import check_metrics, check_parents, check_rows, read_json
 from quadnav.sim.export import FLIGHT_HEADER, flight_csv
 from quadnav.sim.flight import Ending, Flight
 from quadnav.tracking import Tracking
-from quadnav.trajectory.export import CSV_HEADER, csv_table, trajectory_csv
-from quadnav.trajectory.reference import Reference, Samples
+from quadnav.trajectory.references.contract import Reference, Samples
+from quadnav.trajectory.references.export import CSV_HEADER, csv_table, trajectory_csv
 from quadnav.world import World, read_map
 from quadnav.world.mapfile import format_map
 

@@ -2,7 +2,7 @@
 parsing and formatting their ``key=value`` parameter lists.
 
 Built-in worlds (:mod:`quadnav.world.builtin`) and built-in references
-(:mod:`quadnav.trajectory.references`) are both named by such a spec. A value is an
+(:mod:`quadnav.trajectory.references.builtin`) are both named by such a spec. A value is an
 ``int``, a ``float``, a size ``WxDxH`` (three floats, metres), a grid ``NxM`` (two ints)
 or one of a few words (e.g. an axis ``x``, ``y`` or ``z``). A size or grid is a tuple;
 its range applies to every part. Every parameter has a stated range (or its list of

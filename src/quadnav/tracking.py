@@ -1,7 +1,7 @@
 """Flying a given reference — the course's gain-tuning workflow: :func:`track_reference`.
 
 A reference (a built-in shape or step, samples read from a file, any
-:class:`~quadnav.trajectory.reference.Reference`) is flown from a hover at its start in
+:class:`~quadnav.trajectory.references.contract.Reference`) is flown from a hover at its start in
 an empty world (:func:`track_world`): its bounding box widened by
 :data:`BOUNDARY_SLACK` on every side, with the floor at z = 0 when the reference stays
 :data:`FLOOR_CLEARANCE` above it, so that a controller that diverges ends the flight
@@ -31,8 +31,8 @@ from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
 from quadnav.sim.step_response import step_response
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.reference import Reference
-from quadnav.trajectory.references import StepReference
+from quadnav.trajectory.references.builtin import StepReference
+from quadnav.trajectory.references.contract import Reference
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 
@@ -136,7 +136,7 @@ class Tracking:
         } | flight_metrics(self.flight, self.world, self.settings) | self.step_metrics()
 
     def step_metrics(self) -> dict:
-        """For a step reference (:class:`~quadnav.trajectory.references.StepReference`
+        """For a step reference (:class:`~quadnav.trajectory.references.builtin.StepReference`
         with a jump): its axis, size (m) and time (s), and the response
         (:func:`~quadnav.sim.step_response.step_response`): ``overshoot_percent``,
         ``rise_time_s`` (10-90 %), ``settling_time_s`` (2 %, from the step time; None if
@@ -179,7 +179,7 @@ def track_reference(reference: Reference, vehicle: VehicleParams | None = None,
 
     Args:
         reference: what to fly (e.g. from
-            :func:`~quadnav.trajectory.references.load_reference`).
+            :func:`~quadnav.trajectory.references.builtin.load_reference`).
         vehicle: the simulated quadrotor (default: the ``tello`` preset).
         gains: the controller's own gains (default: those tuned for the vehicle,
             :func:`~quadnav.control.registry.controller_gains`).

@@ -73,7 +73,7 @@ from quadnav.plugins import PluginError
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import wind_maker
 from quadnav.trajectory.generate import METHODS, TIMINGS
-from quadnav.trajectory.plain import load_trajectory_class
+from quadnav.trajectory.references.plain import load_trajectory_class
 from quadnav.vehicle.params import DEFAULT_PRESET, load_params, preset_names, vehicle_forms
 from quadnav.world import read_start_goal
 from quadnav.world.builtin import is_builtin_spec

@@ -54,7 +54,7 @@ from quadnav.mission import (
 from quadnav.planning import PlanningProblem, PlanResult, PlanStats, PostStep
 from quadnav.planning.plain import path_fault
 from quadnav.trajectory.model import Trajectory
-from quadnav.trajectory.plain import FlatOutputReference
+from quadnav.trajectory.references.plain import FlatOutputReference
 from quadnav.world.model import World
 
 #: Entries of each stage a worker keeps in memory, the least recently used dropped first.

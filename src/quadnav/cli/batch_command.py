@@ -33,7 +33,6 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.cli.compare_command import leaderboard
 from quadnav.cli.flight_args import force_or_spec, wind_arguments
-from quadnav.cli.launch import interrupted_exit_code
 from quadnav.cli.progress import terminal_bar
 from quadnav.control.registry import DEFAULT_CONTROLLER
 from quadnav.errors import QuadnavError
@@ -41,6 +40,7 @@ from quadnav.limits import Range
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_SPEED
 from quadnav.planning import planner_names
 from quadnav.runfolder import check_output_folder
+from quadnav.signals import interrupted_exit_code
 from quadnav.trajectory.generate import METHODS
 from quadnav.vehicle.params import DEFAULT_PRESET, vehicle_forms
 

@@ -14,7 +14,7 @@ from quadnav.errors import QuadnavError
 from quadnav.limits import FORCE, GUSTS, RATE, SETTLE
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import METHODS, TIMINGS
-from quadnav.trajectory.references import DURATION
+from quadnav.trajectory.references.builtin import DURATION
 from quadnav.vehicle.params import (
     DEFAULT_PRESET,
     VehicleParams,

@@ -15,7 +15,6 @@ from quadnav.cli.args import (
     speed_or_max,
 )
 from quadnav.cli.commands import command_help
-from quadnav.cli.launch import interrupted_exit_code
 from quadnav.errors import QuadnavError
 from quadnav.grading import Grade, read_course
 from quadnav.grading.course import SEED_COUNT, Course
@@ -23,6 +22,7 @@ from quadnav.grading.grade_one import BASELINE, RESULT_FILE
 from quadnav.limits import Range
 from quadnav.missionconfig.checks import located
 from quadnav.runfolder import check_output_folder
+from quadnav.signals import interrupted_exit_code
 
 #: Exit code when a mission of the submission failed.
 EXIT_FAILED = 1

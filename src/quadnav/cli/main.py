@@ -16,8 +16,8 @@ from collections.abc import Sequence
 
 from quadnav import __version__
 from quadnav.cli.commands import COMMANDS, command_in
-from quadnav.cli.launch import report_stop
 from quadnav.errors import QuadnavError
+from quadnav.signals import report_stop
 
 EXIT_USAGE = 2
 

@@ -4,7 +4,7 @@ Each subcommand is one ``add_*`` function in :data:`SUBCOMMANDS`; it registers i
 on the ``tello`` subparsers and sets ``handler`` (called with the parsed arguments, returns
 the exit code).
 
-* ``quadnav tello emulate`` — run a Tello SDK 2.0 emulator (:mod:`quadnav.hardware.emulator`)
+* ``quadnav tello emulate`` — run a Tello SDK 2.0 emulator (:mod:`quadnav.hardware.emulator.server`)
   in the foreground until Ctrl-C.
 * ``quadnav tello fly`` — plan, check and fly a mission on a Tello
   (:mod:`quadnav.cli.tello_fly_command`).
@@ -26,7 +26,7 @@ from quadnav.limits import COORDINATE, HEADING_DEGREES, TIME_SCALE
 
 def emulate(args: argparse.Namespace) -> int:
     """Run the emulator until Ctrl-C (KeyboardInterrupt: exit 130 via the main entry)."""
-    from quadnav.hardware.emulator import Faults, TelloEmulator
+    from quadnav.hardware.emulator.server import Faults, TelloEmulator
 
     faults = Faults.real_tello() if args.imperfect else None
     with TelloEmulator(host=args.host, start=tuple(args.start), yaw=math.radians(args.yaw),

@@ -30,7 +30,7 @@ from quadnav.cli.args import (
 from quadnav.cli.mission_args import mission_config
 from quadnav.cli.progress import planning_bar
 from quadnav.errors import QuadnavError
-from quadnav.hardware.bridge import (
+from quadnav.hardware.bridge.flight import (
     LANDING_TOLERANCE,
     MIN_BATTERY,
     MODES,
@@ -40,16 +40,16 @@ from quadnav.hardware.bridge import (
     Status,
     fly,
 )
-from quadnav.hardware.flight_plan import (
+from quadnav.hardware.bridge.flight_plan import (
     TRACKING_ALLOWANCE,
     NoPathError,
     SavedPlan,
     plan_flight,
 )
-from quadnav.hardware.link import TELLO_IP
-from quadnav.hardware.rc import RC_FULL_SPEED
-from quadnav.hardware.run_record import tello_run_content
-from quadnav.hardware.tello_log import LOG_NAME
+from quadnav.hardware.bridge.link import TELLO_IP
+from quadnav.hardware.bridge.rc import RC_FULL_SPEED
+from quadnav.hardware.bridge.run_record import tello_run_content
+from quadnav.hardware.bridge.tello_log import LOG_NAME
 from quadnav.hardware.truth import TRUTH_FILE_HEADER, read_truth_file
 from quadnav.limits import ACCELERATION, HEADING_DEGREES, SPEED, TIME_SCALE, Range
 from quadnav.mission import DEFAULT_IMPROVE, DEFAULT_TIME_CAP
@@ -58,7 +58,7 @@ from quadnav.report.run_writer import write_run
 from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.runs import RUN_FILES
 from quadnav.trajectory.pathfile import read_path_csv
-from quadnav.trajectory.sampled import read_reference_file
+from quadnav.trajectory.references.sampled import read_reference_file
 
 #: Cruise speed and acceleration of a Tello flight, m/s and m/s^2 (indoors, gently).
 DEFAULT_SPEED = 0.5

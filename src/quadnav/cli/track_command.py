@@ -29,10 +29,10 @@ from quadnav.mission import flight_failure
 from quadnav.runfolder import check_output_folder
 from quadnav.runs import FIGURES, REPORT
 from quadnav.sim.settings import SimSettings
-from quadnav.trajectory.plain import FORMAT as CLASS_FORMAT
-from quadnav.trajectory.plain import is_trajectory_class
-from quadnav.trajectory.reference import Reference
-from quadnav.trajectory.sampled import COURSE_MP_RATE, MP_FORMAT, MP_RATE, TABLE_FORMAT
+from quadnav.trajectory.references.contract import Reference
+from quadnav.trajectory.references.plain import FORMAT as CLASS_FORMAT
+from quadnav.trajectory.references.plain import is_trajectory_class
+from quadnav.trajectory.references.sampled import COURSE_MP_RATE, MP_FORMAT, MP_RATE, TABLE_FORMAT
 
 
 def track(args: argparse.Namespace) -> int:
@@ -40,7 +40,7 @@ def track(args: argparse.Namespace) -> int:
     the end and finished within the goal tolerance of the reference's end."""
     from quadnav.report.run_writer import write_run
     from quadnav.tracking import track_reference
-    from quadnav.trajectory.references import load_reference
+    from quadnav.trajectory.references.builtin import load_reference
 
     folder = check_output_folder(args.output)
     vehicle, gains = vehicle_and_gains(args)

@@ -29,14 +29,14 @@ from quadnav.limits import (
 )
 from quadnav.planning.result import path_length
 from quadnav.runfolder import check_output_folder, replaced_folder
-from quadnav.trajectory.export import mp_csv, trajectory_csv
+from quadnav.trajectory.clearance.space import SafeSpace, trajectory_margins
 from quadnav.trajectory.feasibility import Limits, feasibility
 from quadnav.trajectory.generate import TrajectorySettings, make_trajectory
 from quadnav.trajectory.model import YawMode
 from quadnav.trajectory.pathfile import read_path_csv
-from quadnav.trajectory.sampled import COURSE_MP_RATE
-from quadnav.trajectory.space import SafeSpace, trajectory_margins
-from quadnav.trajectory.timing import DEFAULT_A_MAX, DEFAULT_V_MAX
+from quadnav.trajectory.references.export import mp_csv, trajectory_csv
+from quadnav.trajectory.references.sampled import COURSE_MP_RATE
+from quadnav.trajectory.timing.segment_times import DEFAULT_A_MAX, DEFAULT_V_MAX
 from quadnav.world import load_world
 
 #: Default sample interval of the CSV outputs, s.

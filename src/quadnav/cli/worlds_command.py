@@ -43,7 +43,7 @@ def add_worlds_command(subparsers: argparse._SubParsersAction) -> None:
 def references(args: argparse.Namespace) -> int:
     """Print every built-in reference, a summary line, and its parameters with defaults
     and ranges."""
-    from quadnav.trajectory.references import describe_references
+    from quadnav.trajectory.references.builtin import describe_references
 
     print_specs(describe_references())
     print("Fly one with quadnav track, e.g. quadnav track step:axis=z,size=0.5 or "

@@ -37,16 +37,21 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from quadnav.control.contract import SATURATED, Controller
+from quadnav.control.contract import (
+    REFERENCE_ACCELERATION,
+    REFERENCE_POSITION,
+    REFERENCE_VELOCITY,
+    REFERENCE_YAW,
+    REFERENCE_YAW_RATE,
+    SATURATED,
+    Controller,
+)
 from quadnav.control.gains import Gains
 from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import VehicleArrays
+from quadnav.vehicle.dynamics import ATTITUDE, POSITION, RATES, VELOCITY, VehicleArrays
 from quadnav.vehicle.rotors import mix
 
-#: Reference row layout (11,): position (3) m, velocity (3) m/s, acceleration (3) m/s^2,
-#: yaw rad, yaw rate rad/s.
-REFERENCE_SIZE = 11
 # Memory layout (slot 0 is the contract's: whether the mixer clipped the commands).
 MIXER_SATURATED = SATURATED
 _POSITION_INTEGRAL = 1
@@ -173,23 +178,26 @@ def _attitude_setpoint(thrust: np.ndarray, yaw: float) -> np.ndarray:
 def control(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: GainArrays,
             v: VehicleArrays, dt: float) -> np.ndarray:
     """Motor commands (4,) in [0, 1] for the measured ``state`` (17,; rotor speeds are not
-    used) tracking ``reference`` (:data:`REFERENCE_SIZE`,), ``dt`` s after the last call.
+    used) tracking ``reference`` (:data:`~quadnav.control.contract.REFERENCE_SIZE`,), ``dt``
+    s after the last call.
     Updates ``memory`` in place."""
     started = memory[_STARTED] > 0.0
     alpha = _smoothing(g, dt)
-    r = quaternion.to_matrix(state[6:10])
+    r = quaternion.to_matrix(state[ATTITUDE])
+    position, reference_position = state[POSITION], reference[REFERENCE_POSITION]
+    reference_velocity = reference[REFERENCE_VELOCITY]
     # the 3-vectors of the step below, as views of one array (one allocation, not three)
     work = np.empty(9)
     position_error, v_sp, raw_v = work[0:3], work[3:6], work[6:9]
 
     # 1. position -> velocity setpoint
     for a in range(3):
-        e = reference[a] - state[a]
+        e = reference_position[a] - position[a]
         rate = _filtered_rate(memory, _POSITION_ERROR_RATE, _PREVIOUS_POSITION_ERROR, e, a,
                               dt, alpha, started)
         position_error[a] = e
-        v_sp[a] = (reference[3 + a] + g.position[0, a] * e + memory[_POSITION_INTEGRAL + a]
-                   + g.position[2, a] * rate)
+        v_sp[a] = (reference_velocity[a] + g.position[0, a] * e
+                   + memory[_POSITION_INTEGRAL + a] + g.position[2, a] * rate)
     for a in range(3):  # element by element: array copies compile error messages
         raw_v[a] = v_sp[a]
     _scale_xy(v_sp, g.speed_limits[0])
@@ -209,9 +217,9 @@ def velocity_control(memory: np.ndarray, state: np.ndarray, v_sp: np.ndarray,
     """Steps 2-6 alone: motor commands (4,) in [0, 1] that bring the measured ``state``
     (17,) to the velocity setpoint ``v_sp`` (3,) m/s, world frame, with the reference row's
     acceleration as feed-forward, the drag at its velocity, its yaw and yaw rate
-    (:data:`REFERENCE_SIZE`,). Updates ``memory``."""
-    return _velocity_loops(memory, state, quaternion.to_matrix(state[6:10]), v_sp, reference,
-                           g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
+    (:data:`~quadnav.control.contract.REFERENCE_SIZE`,). Updates ``memory``."""
+    return _velocity_loops(memory, state, quaternion.to_matrix(state[ATTITUDE]), v_sp,
+                           reference, g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
 
 
 @njit(cache=True)
@@ -222,15 +230,17 @@ def _velocity_loops(memory, state, r, v_sp, reference, g: GainArrays, v: Vehicle
     # the 3-vectors of the steps below, as views of one array (one allocation, not four)
     work = np.empty(12)
     velocity_error, a_sp, force, unlimited = work[0:3], work[3:6], work[6:9], work[9:12]
+    velocity, reference_acceleration = state[VELOCITY], reference[REFERENCE_ACCELERATION]
 
     # 2. velocity -> acceleration setpoint
     for a in range(3):
-        e = v_sp[a] - state[3 + a]
-        measured = _filtered_rate(memory, _ACCELERATION, _PREVIOUS_VELOCITY, state[3 + a], a,
+        e = v_sp[a] - velocity[a]
+        measured = _filtered_rate(memory, _ACCELERATION, _PREVIOUS_VELOCITY, velocity[a], a,
                                   dt, alpha, started)
         velocity_error[a] = e
-        a_sp[a] = (reference[6 + a] + g.velocity[0, a] * e + memory[_VELOCITY_INTEGRAL + a]
-                   + g.velocity[2, a] * (reference[6 + a] - measured))
+        a_sp[a] = (reference_acceleration[a] + g.velocity[0, a] * e
+                   + memory[_VELOCITY_INTEGRAL + a]
+                   + g.velocity[2, a] * (reference_acceleration[a] - measured))
     _scale_xy(a_sp, g.acceleration_xy)
 
     # 3. thrust vector, with the drag at the reference velocity as feed-forward
@@ -250,9 +260,9 @@ def _velocity_loops(memory, state, r, v_sp, reference, g: GainArrays, v: Vehicle
             g.velocity[3, a])
     collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
 
-    q_sp = _attitude_setpoint(force, reference[9])
-    return _inner_loops(memory, state, r, q_sp, collective, reference[10], g, v, dt, alpha,
-                        started)
+    q_sp = _attitude_setpoint(force, reference[REFERENCE_YAW])
+    return _inner_loops(memory, state, r, q_sp, collective, reference[REFERENCE_YAW_RATE], g,
+                        v, dt, alpha, started)
 
 
 @njit(cache=True)
@@ -262,7 +272,7 @@ def attitude_control(memory: np.ndarray, state: np.ndarray, q_sp: np.ndarray,
     """Steps 4-6 alone: motor commands (4,) in [0, 1] that turn the measured ``state``
     (17,) to the attitude ``q_sp`` (4,) with ``collective`` thrust N along body z, plus a
     world yaw rate feed-forward ``yaw_rate`` rad/s. Updates ``memory``."""
-    return _inner_loops(memory, state, quaternion.to_matrix(state[6:10]), q_sp, collective,
+    return _inner_loops(memory, state, quaternion.to_matrix(state[ATTITUDE]), q_sp, collective,
                         yaw_rate, g, v, dt, _smoothing(g, dt), memory[_STARTED] > 0.0)
 
 
@@ -282,7 +292,7 @@ def _inner_loops(memory, state, r, q_sp, collective, yaw_rate, g: GainArrays,
     """Steps 4-6 of the cascade (see :func:`attitude_control`), given the body-to-world
     rotation ``r`` (3, 3) of ``state`` and the derivative filters' ``alpha``."""
     # 4. attitude -> body rate setpoint
-    q_error = quaternion.multiply(quaternion.conjugate(state[6:10]), q_sp)
+    q_error = quaternion.multiply(quaternion.conjugate(state[ATTITUDE]), q_sp)
     sign = 1.0 if q_error[0] >= 0.0 else -1.0
     w_sp = np.empty(3)
     for b in range(3):
@@ -299,9 +309,10 @@ def _rate_loop(memory, state, w_sp, collective, g: GainArrays, v: VehicleArrays,
     wrench[0] = collective
     torque = wrench[1:4]
     saturated = memory[MIXER_SATURATED] > 0.0
+    rates = state[RATES]
     for b in range(3):
-        e = _clip(w_sp[b], g.rate_max[b]) - state[10 + b]
-        dw = _filtered_rate(memory, _ANGULAR_ACCELERATION, _PREVIOUS_RATES, state[10 + b], b,
+        e = _clip(w_sp[b], g.rate_max[b]) - rates[b]
+        dw = _filtered_rate(memory, _ANGULAR_ACCELERATION, _PREVIOUS_RATES, rates[b], b,
                             dt, alpha, started)
         torque[b] = v.inertia[b] * (g.rate[0, b] * e + memory[_RATE_INTEGRAL + b]
                                     - g.rate[2, b] * dw)

@@ -9,9 +9,13 @@ A controller is one compiled step (a numba ``@njit`` function)::
   updated in place; slot :data:`SATURATED` is 1.0 after a step whose commands had to be
   clipped (the loop reports the share of such steps) and 0.0 otherwise.
 - ``state``: the measured vehicle state (:mod:`quadnav.vehicle.dynamics`: position,
-  velocity, quaternion (w, x, y, z), body rates, rotor speeds).
-- ``reference``: the row the loop tracks: position (3) m, velocity (3) m/s,
-  acceleration (3) m/s^2, yaw rad, yaw rate rad/s.
+  velocity, quaternion (w, x, y, z), body rates, rotor speeds; its slices
+  :data:`~quadnav.vehicle.dynamics.POSITION`, ``VELOCITY``, ``ATTITUDE``, ``RATES``,
+  ``ROTORS``).
+- ``reference``: the row the loop tracks (:data:`REFERENCE_SIZE`,): position (3) m,
+  velocity (3) m/s, acceleration (3) m/s^2, yaw rad, yaw rate rad/s (its columns
+  :data:`REFERENCE_POSITION`, :data:`REFERENCE_VELOCITY`, :data:`REFERENCE_ACCELERATION`,
+  :data:`REFERENCE_YAW`, :data:`REFERENCE_YAW_RATE`).
 - ``gains``: the controller's compiled gains, any value numba can pass (an array, a
   NamedTuple of arrays and floats), of one type.
 - ``vehicle``: the vehicle as the controller knows it
@@ -41,6 +45,20 @@ from quadnav.arrays import FloatArray
 
 #: The memory slot that says whether the last step's commands were clipped.
 SATURATED = 0
+
+#: Length of a reference row, and the columns of each quantity in it (numba kernels
+#: read these module-level constants as compile-time constants).
+REFERENCE_SIZE = 11
+#: Position (3,) m.
+REFERENCE_POSITION = slice(0, 3)
+#: Velocity (3,) m/s.
+REFERENCE_VELOCITY = slice(3, 6)
+#: Acceleration (3,) m/s^2.
+REFERENCE_ACCELERATION = slice(6, 9)
+#: Yaw, rad.
+REFERENCE_YAW = 9
+#: Yaw rate, rad/s.
+REFERENCE_YAW_RATE = 10
 
 
 class PythonSide(Protocol):

@@ -39,7 +39,15 @@ from numba import njit
 from quadnav.arrays import FloatArray
 from quadnav.control import cascade
 from quadnav.control.cascade import GainArrays, gain_arrays
-from quadnav.control.contract import SATURATED, Controller, PythonSide
+from quadnav.control.contract import (
+    REFERENCE_SIZE,
+    REFERENCE_VELOCITY,
+    REFERENCE_YAW,
+    REFERENCE_YAW_RATE,
+    SATURATED,
+    Controller,
+    PythonSide,
+)
 from quadnav.control.gains import Gains
 from quadnav.vehicle.dynamics import VehicleArrays
 from quadnav.vehicle.rotors import mix
@@ -102,8 +110,10 @@ def held_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: G
         for b in range(3):
             rates[b] = memory[COMMAND + 1 + b]
         return cascade.rate_control(memory, state, rates, thrust, g, v, dt)
-    row = np.zeros(cascade.REFERENCE_SIZE)  # VELOCITY: no acceleration feed-forward
+    row = np.zeros(REFERENCE_SIZE)  # VELOCITY: no acceleration feed-forward
+    velocity = row[REFERENCE_VELOCITY]
     for a in range(3):
-        row[3 + a] = memory[COMMAND + a]
-    row[9], row[10] = reference[9], reference[10]
-    return cascade.velocity_control(memory, state, row[3:6], row, g, v, dt)
+        velocity[a] = memory[COMMAND + a]
+    row[REFERENCE_YAW] = reference[REFERENCE_YAW]
+    row[REFERENCE_YAW_RATE] = reference[REFERENCE_YAW_RATE]
+    return cascade.velocity_control(memory, state, velocity, row, g, v, dt)

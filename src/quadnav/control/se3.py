@@ -37,11 +37,19 @@ from numba import njit
 
 from quadnav.arrays import FloatArray
 from quadnav.config import frozen_vector, require, vector_field
-from quadnav.control.contract import SATURATED, Controller
+from quadnav.control.contract import (
+    REFERENCE_ACCELERATION,
+    REFERENCE_POSITION,
+    REFERENCE_VELOCITY,
+    REFERENCE_YAW,
+    REFERENCE_YAW_RATE,
+    SATURATED,
+    Controller,
+)
 from quadnav.control.gains import gain_checks
 from quadnav.control.terms import add_gyroscopic, reference_drag
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import VehicleArrays
+from quadnav.vehicle.dynamics import ATTITUDE, POSITION, RATES, VELOCITY, VehicleArrays
 from quadnav.vehicle.rotors import mix
 
 #: Memory: only the contract's saturation flag.
@@ -97,11 +105,16 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
              v: VehicleArrays, dt: float) -> np.ndarray:
     """Motor commands (4,) in [0, 1] for the measured ``state`` (17,) tracking
     ``reference`` (11,); see the module docstring."""
-    r = quaternion.to_matrix(state[6:10])
+    r = quaternion.to_matrix(state[ATTITUDE])
+    position, velocity = state[POSITION], state[VELOCITY]
+    reference_position, reference_velocity = (reference[REFERENCE_POSITION],
+                                              reference[REFERENCE_VELOCITY])
+    reference_acceleration = reference[REFERENCE_ACCELERATION]
     force = np.empty(3)
     for a in range(3):
-        force[a] = v.mass * (-g.kx[a] * (state[a] - reference[a])
-                             - g.kv[a] * (state[3 + a] - reference[3 + a]) + reference[6 + a])
+        force[a] = v.mass * (-g.kx[a] * (position[a] - reference_position[a])
+                             - g.kv[a] * (velocity[a] - reference_velocity[a])
+                             + reference_acceleration[a])
     force[2] += v.mass * v.gravity
     drag = reference_drag(r, v, reference)  # as feed-forward, in world axes
     for a in range(3):
@@ -109,7 +122,8 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
     collective = max(force[0] * r[0, 2] + force[1] * r[1, 2] + force[2] * r[2, 2], 0.0)
 
     b3 = force / math.sqrt(force[0] ** 2 + force[1] ** 2 + force[2] ** 2)
-    heading = np.array([math.cos(reference[9]), math.sin(reference[9]), 0.0])
+    yaw = reference[REFERENCE_YAW]
+    heading = np.array([math.cos(yaw), math.sin(yaw), 0.0])
     b2 = np.cross(b3, heading)
     b2 /= math.sqrt(b2[0] ** 2 + b2[1] ** 2 + b2[2] ** 2)
     b1 = np.cross(b2, b3)
@@ -118,9 +132,9 @@ def se3_step(memory: np.ndarray, state: np.ndarray, reference: np.ndarray, g: SE
         rd[a, 0], rd[a, 1], rd[a, 2] = b1[a], b2[a], b3[a]
     error = 0.5 * (rd.T @ r - r.T @ rd)
     e_r = np.array([error[2, 1], error[0, 2], error[1, 0]])
-    w_d = r.T @ np.array([0.0, 0.0, reference[10]])  # the yaw rate, in body axes
+    w_d = r.T @ np.array([0.0, 0.0, reference[REFERENCE_YAW_RATE]])  # yaw rate, body axes
     torque = np.empty(3)
-    w = state[10:13]
+    w = state[RATES]
     for b in range(3):
         torque[b] = v.inertia[b] * (-g.kr[b] * e_r[b] - g.kw[b] * (w[b] - w_d[b]))
     add_gyroscopic(torque, state, v)

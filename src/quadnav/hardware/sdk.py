@@ -17,7 +17,7 @@ Replies, as the real drone and djitellopy 2.5 have them:
 * nothing for ``rc``, ``emergency`` and ``reboot``, which djitellopy sends without
   waiting for a reply (a reply would be taken as the next command's).
 
-Frames (see also :mod:`quadnav.hardware.frames`): ``go`` and ``curve`` points are in the
+Frames (see also :mod:`quadnav.hardware.bridge.frames`): ``go`` and ``curve`` points are in the
 drone's heading frame at the time of the command — x forward, y left, z up, cm;
 ``rc a b c d`` is left/right (+ right), forward/back (+ forward), up/down (+ up) and yaw
 (+ clockwise seen from above), each -100..100.

@@ -11,7 +11,7 @@ the map frame when it stands on the floor under the map's start (``--start``, as
 bridge's takeoff), facing ``--yaw`` as the flight's.
 
 :func:`flight_truth` keeps the rows from the start of the bridge's dead reckoning on, in
-its time: drone seconds since its :attr:`~quadnav.hardware.dead_reckoning.DeadReckoning.
+its time: drone seconds since its :attr:`~quadnav.hardware.bridge.dead_reckoning.DeadReckoning.
 epoch` (UNIX seconds since it, times the time scale), which is flight.csv's time; the run
 folder's ``truth.csv`` holds them (:data:`~quadnav.runs.TRUTH_HEADER`).
 """

@@ -41,8 +41,8 @@ from quadnav.planning.stall import DEFAULT_STALL_FRACTION, DEFAULT_STALL_SAMPLES
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import wind_maker
 from quadnav.trajectory.generate import METHODS, TIMINGS
-from quadnav.trajectory.plain import load_trajectory_class
-from quadnav.trajectory.references import DURATION
+from quadnav.trajectory.references.builtin import DURATION
+from quadnav.trajectory.references.plain import load_trajectory_class
 
 #: The parts of the vehicle a spread scales, in the order its factors are drawn.
 SPREAD_PARTS = ("mass", "thrust", "drag")
@@ -109,7 +109,7 @@ class Trajectory(Section):
         speed: top speed, m/s, or ``"max"``: as fast as the vehicle can follow.
         accel: largest acceleration, m/s^2 (ignored with ``"max"``).
         reference: a trajectory class of your own (a plug-in spec,
-            :mod:`quadnav.trajectory.plain`) flown instead of the trajectory made through
+            :mod:`quadnav.trajectory.references.plain`) flown instead of the trajectory made through
             the path; None: that trajectory.
         duration: how long ``reference`` is flown, s; None: as long as it says it lasts.
     """

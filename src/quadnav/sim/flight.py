@@ -8,7 +8,9 @@ from enum import Enum
 import numpy as np
 
 from quadnav.arrays import FloatArray
+from quadnav.control.contract import REFERENCE_POSITION
 from quadnav.sim.excursion import Excursion
+from quadnav.vehicle.dynamics import ATTITUDE, POSITION, VELOCITY
 
 
 class Ending(Enum):
@@ -83,17 +85,17 @@ class Flight:
     @property
     def position(self) -> FloatArray:
         """(N, 3) positions, m."""
-        return self.states[:, 0:3]
+        return self.states[:, POSITION]
 
     @property
     def velocity(self) -> FloatArray:
         """(N, 3) velocities, m/s."""
-        return self.states[:, 3:6]
+        return self.states[:, VELOCITY]
 
     @property
     def attitude(self) -> FloatArray:
         """(N, 4) attitude quaternions ``(w, x, y, z)``."""
-        return self.states[:, 6:10]
+        return self.states[:, ATTITUDE]
 
     @property
     def duration(self) -> float:
@@ -103,9 +105,9 @@ class Flight:
     @property
     def final_error(self) -> float:
         """Distance from the final position to the goal, m."""
-        return float(np.linalg.norm(self.states[-1, 0:3] - self.goal))
+        return float(np.linalg.norm(self.position[-1] - self.goal))
 
     @property
     def tracking_error(self) -> FloatArray:
         """(N,) position error at each sample, m."""
-        return np.linalg.norm(self.position - self.reference[:, 0:3], axis=1)
+        return np.linalg.norm(self.position - self.reference[:, REFERENCE_POSITION], axis=1)

@@ -23,11 +23,20 @@ import numpy as np
 from numba import njit
 from numba.core.types import CompileResultWAP
 
+from quadnav.control.contract import REFERENCE_VELOCITY, Controller
 from quadnav.control.contract import SATURATED as STEP_SATURATED
-from quadnav.control.contract import Controller
 from quadnav.sim.collision import body_grid, touched_block
 from quadnav.vehicle import quaternion
-from quadnav.vehicle.dynamics import STATE_SIZE, VehicleArrays, rk4_step, rk4_workspace
+from quadnav.vehicle.dynamics import (
+    ATTITUDE,
+    POSITION,
+    RATES,
+    STATE_SIZE,
+    VELOCITY,
+    VehicleArrays,
+    rk4_step,
+    rk4_workspace,
+)
 from quadnav.world.blockgrid import GridArrays
 from quadnav.world.model import World
 
@@ -108,13 +117,14 @@ def measured(state: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """The state as the sensors see it: noise (12,) on position, velocity, attitude
     (a small rotation) and body rates."""
     out = state.copy()
-    attitude = quaternion.multiply(state[6:10], quaternion.from_rotation_vector(noise[6:9]))
+    attitude = quaternion.multiply(state[ATTITUDE],
+                                   quaternion.from_rotation_vector(noise[6:9]))
     for i in range(6):  # element by element: array copies compile error messages
-        out[i] += noise[i]
+        out[i] += noise[i]  # position and velocity
     for i in range(4):
-        out[6 + i] = attitude[i]
+        out[ATTITUDE.start + i] = attitude[i]
     for i in range(3):
-        out[10 + i] += noise[9 + i]
+        out[RATES.start + i] += noise[9 + i]
     return out
 
 
@@ -123,13 +133,13 @@ def _stop_code(state, v: VehicleArrays, where: Scene, stats) -> int:
     for value in state:
         if not math.isfinite(value):
             return DIVERGED
-    r = quaternion.to_matrix(state[6:10])
+    r = quaternion.to_matrix(state[ATTITUDE])
     if r[2, 2] < 0.0:
         return DIVERGED
     for a in range(3):
         if not where.boundary[a] <= state[a] <= where.boundary[a + 3]:
             return LEFT_BOUNDARY
-    block = touched_block(state[0:3], r, v.half_size, where.blocks, where.grid)
+    block = touched_block(state[POSITION], r, v.half_size, where.blocks, where.grid)
     if block >= 0:
         stats[CONTACT_BLOCK] = block
         return COLLISION
@@ -185,7 +195,8 @@ def fly_steps(step, state: np.ndarray, memory: np.ndarray, first: int, last: int
         velocity_error = 0.0
         for a in range(3):
             error += (state[a] - reference[a]) ** 2
-            velocity_error += (state[3 + a] - reference[3 + a]) ** 2
+            velocity_error += (state[VELOCITY.start + a]
+                               - reference[REFERENCE_VELOCITY.start + a]) ** 2
         stats = record.stats
         stats[SUM_SQUARED_ERROR] += error
         stats[MAX_ERROR] = max(stats[MAX_ERROR], math.sqrt(error))

@@ -1,6 +1,6 @@
 """Fly a reference in simulation: :func:`simulate`.
 
-The reference (a :class:`~quadnav.trajectory.reference.Reference`: a trajectory, a
+The reference (a :class:`~quadnav.trajectory.references.contract.Reference`: a trajectory, a
 built-in shape or samples read from a file) is sampled once at the control rate into a
 reference table (position, velocity, acceleration, yaw, yaw rate; held at the end during
 the settling time); the wind, gusts and sensor noise are drawn up front from
@@ -35,7 +35,12 @@ from collections.abc import Callable
 import numpy as np
 
 from quadnav.arrays import FloatArray
-from quadnav.control.contract import Controller
+from quadnav.control.contract import (
+    REFERENCE_ACCELERATION,
+    REFERENCE_POSITION,
+    REFERENCE_YAW,
+    Controller,
+)
 from quadnav.control.gains import Gains
 from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
@@ -44,8 +49,15 @@ from quadnav.sim.excursion import Excursion, body_excursion
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.wind import load_wind
-from quadnav.trajectory.reference import Reference
-from quadnav.vehicle.dynamics import ROTORS, STATE_SIZE, hover_state, vehicle_arrays
+from quadnav.trajectory.references.contract import Reference
+from quadnav.vehicle.dynamics import (
+    ATTITUDE,
+    POSITION,
+    ROTORS,
+    STATE_SIZE,
+    hover_state,
+    vehicle_arrays,
+)
 from quadnav.vehicle.params import VehicleParams, load_params
 from quadnav.world.model import World
 
@@ -101,7 +113,7 @@ def jerk_snap_table(trajectory: Reference, dt: float, steps: int,
         return np.column_stack([trajectory.jerk(t), trajectory.snap(t)])
     if steps < 2:
         return np.zeros((steps, 6))
-    jerk = np.gradient(references[:, 6:9], dt, axis=0)
+    jerk = np.gradient(references[:, REFERENCE_ACCELERATION], dt, axis=0)
     return np.column_stack([jerk, np.gradient(jerk, dt, axis=0)])
 
 
@@ -132,7 +144,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
 
     Args:
         trajectory: the reference: a :class:`~quadnav.trajectory.model.Trajectory` or
-            any other :class:`~quadnav.trajectory.reference.Reference`.
+            any other :class:`~quadnav.trajectory.references.contract.Reference`.
         params: the vehicle that flies, the plant (default: the ``tello`` preset).
         gains: the cascade's gains, when no ``controller`` is given (default: those tuned
             for ``model``, the vehicle the controller knows,
@@ -163,7 +175,8 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
     forces, noise = _disturbances(settings, steps, dt)
     vehicle = vehicle_arrays(params)
     controller_model = vehicle if model is None else vehicle_arrays(model)
-    state = (hover_state(params, references[0, 0:3], references[0, 9]) if initial_state is None
+    state = (hover_state(params, references[0, REFERENCE_POSITION], references[0, REFERENCE_YAW])
+             if initial_state is None
              else np.array(initial_state, dtype=np.float64).reshape(STATE_SIZE))
     memory = controller.new_memory()
     where = loop.scene(world, vehicle.half_size, settings.boundary_tolerance,
@@ -212,7 +225,7 @@ def simulate(trajectory: Reference, params: VehicleParams | None = None,
         floor_speed=(None if record.stats[loop.FLOOR_SPEED] < 0
                      else float(record.stats[loop.FLOOR_SPEED])),
         body_outside=(Excursion() if world is None else body_excursion(
-            t, states[:, 0:3], states[:, 6:10], vehicle.half_size, world.boundary)),
+            t, states[:, POSITION], states[:, ATTITUDE], vehicle.half_size, world.boundary)),
         info={"vehicle": params.name, "physics_rate_hz": settings.physics_rate,
               "control_rate_hz": settings.control_rate, "seed": settings.seed})
 
@@ -238,7 +251,7 @@ def python_steps(run: Callable[[int, int], tuple[int, int]], controller: Control
         for k in range(first, last):
             t = k * dt
             if wind is not None:
-                acting.wind[k] = wind.at(t, state[0:3])
+                acting.wind[k] = wind.at(t, state[POSITION])
             if python is not None and jerk_snap is not None:
                 seen = loop.measured(state, acting.noise[k]) if acting.noisy else state
                 python.before_step(memory, t, seen, references[k], jerk_snap[k],

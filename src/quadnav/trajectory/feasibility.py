@@ -42,9 +42,9 @@ class Limits:
     """What a Tello-class (80 g) quadrotor can fly; conservative indoor values.
 
     The speed and acceleration limits are above the time allocation's defaults
-    (:data:`~quadnav.trajectory.timing.DEFAULT_V_MAX`, ``DEFAULT_A_MAX``) because a smooth
-    polynomial peaks above the trapezoidal profile those times assume (a rest-to-rest
-    quintic reaches 1.875 times its mean speed).
+    (:data:`~quadnav.trajectory.timing.segment_times.DEFAULT_V_MAX`, ``DEFAULT_A_MAX``)
+    because a smooth polynomial peaks above the trapezoidal profile those times assume (a
+    rest-to-rest quintic reaches 1.875 times its mean speed).
 
     Attributes:
         v_max: speed, m/s, > 0.

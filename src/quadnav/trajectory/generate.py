@@ -2,7 +2,7 @@
 
 :func:`make_trajectory` is the stage's one entry point: the chosen generator, segment
 times by the chosen timing (by default the near time-optimal one of
-:mod:`quadnav.trajectory.retime`: cruise at the top speed, slow only for turns and the
+:mod:`quadnav.trajectory.timing.retime`: cruise at the top speed, slow only for turns and the
 ends), safe corridors for the constrained minimum-snap QP, and — given a
 :class:`SafeSpace` — straight legs out of the margin and collision-aware refinement of the
 rest, which adds waypoints until a dense exact check finds it clear of the margin.
@@ -29,17 +29,17 @@ from quadnav.errors import QuadnavError
 from quadnav.limits import ACCELERATION, SPEED, Range
 from quadnav.planning.result import distinct
 from quadnav.plugins import Registry
-from quadnav.trajectory.collision import refine_until_free
-from quadnav.trajectory.corridor import safe_corridors
-from quadnav.trajectory.cubic import cubic_spline
+from quadnav.trajectory.clearance.collision import refine_until_free
+from quadnav.trajectory.clearance.corridor import safe_corridors
+from quadnav.trajectory.clearance.space import SafeSpace
 from quadnav.trajectory.feasibility import Limits
-from quadnav.trajectory.minsnap import minimum_snap
-from quadnav.trajectory.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.model import Trajectory, YawMode
-from quadnav.trajectory.quintic import quintic_average, quintic_c2, quintic_segments
-from quadnav.trajectory.retime import fastest_times, knots, stretch_where_fast
-from quadnav.trajectory.space import SafeSpace
-from quadnav.trajectory.timing import (
+from quadnav.trajectory.polynomials.cubic import cubic_spline
+from quadnav.trajectory.polynomials.minsnap import minimum_snap
+from quadnav.trajectory.polynomials.minsnap_qp import minimum_snap_qp
+from quadnav.trajectory.polynomials.quintic import quintic_average, quintic_c2, quintic_segments
+from quadnav.trajectory.timing.retime import fastest_times, knots, stretch_where_fast
+from quadnav.trajectory.timing.segment_times import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
     average_times,
@@ -66,7 +66,7 @@ METHODS: Registry[Method] = Registry("trajectory method", "quadnav.trajectory_me
     "cubic": lambda waypoints, times, settings: cubic_spline(waypoints, times),
     "quintic-average": lambda waypoints, times, settings: quintic_average(waypoints, times),
 })
-#: Timings by name: near time-optimal along the curve (:mod:`quadnav.trajectory.retime`),
+#: Timings by name: near time-optimal along the curve (:mod:`quadnav.trajectory.timing.retime`),
 #: each segment a rest-to-rest trapezoid then all stretched alike, or minimum snap plus
 #: a weight times the total time (``minsnap`` only). ``quintic-average`` has its own.
 TIMINGS = ("fastest", "rest-to-rest", "snap-time")
@@ -173,7 +173,7 @@ def make_trajectory(waypoints: ArrayLike, settings: TrajectorySettings | None = 
             exactly on the path;
             the rest is one smooth piece to which
             waypoints are added until a dense exact check finds it free in the inflated
-            map (see :func:`quadnav.trajectory.collision.refine_until_free`), and
+            map (see :func:`quadnav.trajectory.clearance.collision.refine_until_free`), and
             corridors can be used. Without it nothing is checked.
     """
     settings = settings or TrajectorySettings()

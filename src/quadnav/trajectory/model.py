@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import PPoly
 
 from quadnav.arrays import FloatArray
-from quadnav.trajectory.reference import Sampling
+from quadnav.trajectory.references.contract import Sampling
 
 #: Below this horizontal speed, m/s, a travel-facing yaw follows the current segment's
 #: direction instead of the velocity.
@@ -46,7 +46,7 @@ def ppoly_from_ascending(coefficients: ArrayLike, breaks: ArrayLike) -> PPoly:
 @dataclass(frozen=True, eq=False)
 class Trajectory(Sampling):
     """A smooth reference through waypoints (a
-    :class:`~quadnav.trajectory.reference.Reference`).
+    :class:`~quadnav.trajectory.references.contract.Reference`).
 
     Attributes:
         poly: position as a vector-valued PPoly of time (s -> m, 3 axes); its breaks are
@@ -59,7 +59,7 @@ class Trajectory(Sampling):
         leg_segments: how many of the first and of the last waypoint intervals are the
             legs out of the safety margin at the start and into it at the goal (0 without
             such legs); between them the trajectory keeps the whole margin (see
-            :mod:`quadnav.trajectory.space`).
+            :mod:`quadnav.trajectory.clearance.space`).
     """
 
     poly: PPoly

@@ -26,7 +26,7 @@ from quadnav.config import toml_text
 from quadnav.pages import figure, render
 from quadnav.report.html_report import png_bytes
 from quadnav.runfolder import replaced_folder
-from quadnav.trajectory.export import csv_table
+from quadnav.trajectory.references.export import csv_table
 from quadnav.tune.evaluate import (
     FAILURE_PENALTY,
     OVERSHOOT_ALLOWED,

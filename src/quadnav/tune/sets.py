@@ -4,7 +4,7 @@ turned into :class:`TuneItem`\\ s, each a reference flown in its world.
 A set is a TOML table: the keys of a batch spec (:mod:`quadnav.batch.grid`: ``maps``,
 ``seeds``, ``speeds``, ``winds``, ``gusts``, ``spreads``, ``planners`` and the fixed
 settings) for its missions, plus ``references``, built-in reference specs or reference
-files (:func:`~quadnav.trajectory.references.load_reference`), flown once per seed, wind
+files (:func:`~quadnav.trajectory.references.builtin.load_reference`), flown once per seed, wind
 and gust level::
 
     references = ["hover:duration=4", "step:axis=x", "helix:speed=1.5,laps=2"]
@@ -38,8 +38,8 @@ from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.limits import speed_text
 from quadnav.sim.settings import SimSettings
 from quadnav.tracking import track_world
-from quadnav.trajectory.reference import Reference
-from quadnav.trajectory.references import StepReference, load_reference
+from quadnav.trajectory.references.builtin import StepReference, load_reference
+from quadnav.trajectory.references.contract import Reference
 from quadnav.vehicle.params import VehicleParams
 from quadnav.world.model import World
 

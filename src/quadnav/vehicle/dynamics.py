@@ -34,6 +34,8 @@ from quadnav.vehicle import quaternion
 from quadnav.vehicle.params import VehicleParams
 from quadnav.vehicle.rotors import SPIN, allocation_matrix
 
+#: Length of a state, and the slices of each quantity in it (see the module docstring;
+#: numba kernels read these module-level constants as compile-time constants).
 STATE_SIZE = 17
 POSITION = slice(0, 3)
 VELOCITY = slice(3, 6)
@@ -239,5 +241,5 @@ def rk4_step(x: np.ndarray, commands: np.ndarray, v: VehicleArrays, force: np.nd
     x[3] = 0.0
     x[4] = 0.0
     x[5] = max(x[5], 0.0)
-    x[10:13] = 0.0
+    x[RATES] = 0.0
     return speed

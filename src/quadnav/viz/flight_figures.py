@@ -132,7 +132,7 @@ def _flight(run: Run) -> FlightTable:
 
 def _desired(run: Run, name: str) -> np.ndarray:
     """trajectory.csv's column(s) ``name`` (a field of
-    :class:`~quadnav.trajectory.reference.Samples`: (N,) or (N, 3)) at the flight's sample
+    :class:`~quadnav.trajectory.references.contract.Samples`: (N,) or (N, 3)) at the flight's sample
     times, linearly interpolated (held at the last after its end)."""
     flight, trajectory = _flight(run), run.trajectory
     values = getattr(trajectory, name)
@@ -338,7 +338,7 @@ def figure_makers(run: Run) -> dict[str, Callable[[Run], Figure]]:
     :data:`~quadnav.runs.FIGURES`: the 3D view always, the states, the tracking
     error and the attitude and motors when there was a flight (of a real drone's flight,
     the tracking error alone, and with a true track the drift from it,
-    :data:`~quadnav.runs.DRIFT_FIGURE`: see :mod:`quadnav.hardware.run_record`)."""
+    :data:`~quadnav.runs.DRIFT_FIGURE`: see :mod:`quadnav.hardware.bridge.run_record`)."""
     makers = dict(zip(FIGURES, (flight_3d_figure, flight_states_figure,
                                 tracking_error_figure, attitude_motors_figure), strict=True))
     if run.flight is None:
