@@ -18,7 +18,6 @@ import struct
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
 from quadnav import __version__
@@ -138,12 +137,9 @@ def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
 
 
 def png_bytes(fig: Figure) -> bytes:
-    """``fig`` as PNG bytes; the figure is closed."""
+    """``fig`` as PNG bytes."""
     buffer = io.BytesIO()
-    try:
-        fig.savefig(buffer, format="png")
-    finally:
-        plt.close(fig)
+    fig.savefig(buffer, format="png")
     return buffer.getvalue()
 
 

@@ -1,14 +1,28 @@
-"""Saving figures: checked file types, written whole or not at all."""
+"""Making and saving figures: each figure has an Agg canvas of its own (no pyplot, which
+keeps every figure open until it is closed, and costs its import); files are of checked
+types, written whole or not at all."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
+
+#: Resolution of the figures, dots per inch: they are drawn to be shown about 1100 pixels
+#: wide (the report's width).
+DPI = 120
+
+
+def new_figure(size: tuple[float, float]) -> Figure:
+    """An empty figure ``size`` (width, height) inches at :data:`DPI`, with a constrained
+    layout, drawn by its own Agg canvas."""
+    fig = Figure(figsize=size, dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def check_figure_path(path: str | Path) -> str:
@@ -24,10 +38,7 @@ def check_figure_path(path: str | Path) -> str:
 
 
 def save_figure(fig: Figure, path: str | Path) -> None:
-    """Save and close ``fig``; the file at ``path`` is either complete or untouched."""
+    """Save ``fig``; the file at ``path`` is either complete or untouched."""
     fmt = check_figure_path(path)
-    try:
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, format=fmt)
-    finally:
-        plt.close(fig)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format=fmt)
