@@ -4,6 +4,7 @@ agrees with the mission that wrote the folder, and what write_run saves."""
 from __future__ import annotations
 
 import dataclasses
+import gc
 import struct
 
 import numpy as np
@@ -139,6 +140,26 @@ def test_write_run_draws_each_figure_once(mission, tmp_path, monkeypatch):
     counter = DrawCounter(monkeypatch)
     write_run(mission, tmp_path)
     assert counter.of_figures() == [1] * len(FIGURES)
+
+
+def test_write_run_spares_the_collector_while_drawing_and_hands_everything_back(mission,
+                                                                              tmp_path):
+    """The objects alive before the figures are drawn are kept out of the garbage
+    collector's collections while they are (each full collection would walk them all
+    again), and handed back to it afterwards, so nothing stays out of its reach."""
+    frozen: list[int] = []
+
+    def watch(phase: str, info: dict) -> None:
+        if phase == "start":
+            frozen.append(gc.get_freeze_count())
+
+    gc.callbacks.append(watch)
+    try:
+        write_run(mission, tmp_path)
+    finally:
+        gc.callbacks.remove(watch)
+    assert max(frozen) > 0
+    assert gc.get_freeze_count() == 0
 
 
 def test_3d_figure_shows_an_oblique_3d_view_and_a_2d_top_view(run):

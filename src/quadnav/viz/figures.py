@@ -4,6 +4,9 @@ types, written whole or not at all."""
 
 from __future__ import annotations
 
+import gc
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -42,3 +45,16 @@ def save_figure(fig: Figure, path: str | Path) -> None:
     fmt = check_figure_path(path)
     with atomic_output(path) as tmp:
         fig.savefig(tmp, format=fmt)
+
+
+@contextmanager
+def collector_spared() -> Iterator[None]:
+    """Keep the objects alive now (a command's imports and its run: hundreds of thousands)
+    out of the garbage collector's full collections while figures are made and saved,
+    which make so many short-lived objects that it collects again and again; they are
+    handed back to it afterwards, so nothing is kept that would have been freed."""
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()

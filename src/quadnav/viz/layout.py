@@ -222,8 +222,9 @@ def _layout_only(fig: Figure) -> Iterator[None]:
 
 def lay_out(fig: Figure) -> None:
     """Place everything of ``fig`` where drawing it would, without drawing it: its layout
-    engine sizes and places the axes, then each axes places its ticks, its tick and axis
-    labels and its title (a 3D axes projects them at its box's present zoom)."""
+    engine sizes and places the axes (measuring them: a 3D axes at its box's present
+    zoom), then each axes keeps its aspect in that place and places its ticks, tick
+    labels and axis labels there."""
     renderer = fig.canvas.get_renderer()
     for ax in fig.axes:
         if isinstance(ax, Axes3D):  # the projection a draw would use (its zoom may be new)
@@ -232,8 +233,10 @@ def lay_out(fig: Figure) -> None:
     engine = fig.get_layout_engine()
     if engine is not None:
         engine.execute(fig)
-    for ax in fig.axes:  # where the layout put it, not where it was measured
-        ax.get_tightbbox(renderer)
+    for ax in fig.axes:
+        ax.apply_aspect()
+        for axis in _axes_axes(ax):
+            axis.get_tightbbox(renderer)
 
 
 def _fix_layout(fig: Figure) -> None:
