@@ -13,6 +13,35 @@ from matplotlib.patheffects import Stroke
 from mpl_toolkits.mplot3d import Axes3D
 
 
+class DrawCounter:
+    """How many times each figure made while it watches (from ``__init__`` on, through
+    ``monkeypatch``) is drawn, as matplotlib itself tells: a figure sends 'draw_event' at
+    the end of every draw, rendered or not (a layout's ``draw_without_rendering``, the
+    draw ``savefig`` makes before it renders)."""
+
+    def __init__(self, monkeypatch) -> None:
+        self.figures: list[Figure] = []
+        self.draws: list[int] = []
+        make = Figure.__init__
+
+        def watched(fig: Figure, *args, **kwargs) -> None:
+            make(fig, *args, **kwargs)
+            index = len(self.figures)
+            self.figures.append(fig)
+            self.draws.append(0)
+            fig.canvas.mpl_connect("draw_event", lambda event: self._drawn(index))
+
+        monkeypatch.setattr(Figure, "__init__", watched)
+
+    def _drawn(self, index: int) -> None:
+        self.draws[index] += 1
+
+    def of_figures(self) -> list[int]:
+        """The draws of each figure with axes, in the order they were made (a figure
+        without axes is made only to ask matplotlib something)."""
+        return [draws for fig, draws in zip(self.figures, self.draws, strict=True) if fig.axes]
+
+
 def draw(fig: Figure):
     """Draw ``fig`` as savefig would; returns the renderer."""
     fig.canvas.draw()

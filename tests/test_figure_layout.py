@@ -9,7 +9,14 @@ import io
 
 import numpy as np
 import pytest
-from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined, draw
+from figurecheck import (
+    DrawCounter,
+    assert_labels_apart,
+    assert_legends_outside,
+    assert_outlined,
+    draw,
+)
+from matplotlib import rc_context
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
@@ -20,9 +27,11 @@ from quadnav.hardware.bridge.flight_plan import plan_flight
 from quadnav.hardware.bridge.track_figure import track_figure
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings, get_planner, make_problem
+from quadnav.report.html_report import png_bytes
 from quadnav.report.run_writer import write_run
 from quadnav.runs import read_run
 from quadnav.trajectory.generate import make_trajectory
+from quadnav.viz.figures import save_figure
 from quadnav.viz.flight_figures import flight_3d_figure
 from quadnav.viz.map3d import MIN_SIDE, world_figure
 from quadnav.viz.plan_figure import plan_figure
@@ -99,6 +108,20 @@ def test_trajectory_figures_have_legends_outside():
                 states_figure(trajectory, 1.0, 1.5)):
         assert_legends_outside(fig)
         assert_labels_apart(fig)
+
+
+def test_a_finished_figure_is_drawn_once_when_saved(tmp_path, monkeypatch):
+    """A 3D figure is laid out in rounds (its box zoomed to fit, crowded ticks thinned)
+    and a 2D one in one, without drawing: saving it to a file or into a page draws it
+    once."""
+    counter = DrawCounter(monkeypatch)
+    save_figure(world_figure(LONG), tmp_path / "long.png")
+    png_bytes(world_figure(TALL))
+    trajectory = make_trajectory(np.array([[1.0, 1.0, 1.0], [29.0, 1.0, 1.0]]))
+    save_figure(states_figure(trajectory, 1.0, 1.5), tmp_path / "states.png")
+    with rc_context({"figure.constrained_layout.use": True}):  # as a user's matplotlibrc may
+        png_bytes(world_figure(FLAT))
+    assert counter.of_figures() == [1, 1, 1, 1]
 
 
 def test_an_outlined_red_line_shows_on_a_red_block():

@@ -4,11 +4,17 @@ agrees with the mission that wrote the folder, and what write_run saves."""
 from __future__ import annotations
 
 import dataclasses
+import gc
 import struct
 
 import numpy as np
 import pytest
-from figurecheck import assert_labels_apart, assert_legends_outside, assert_outlined
+from figurecheck import (
+    DrawCounter,
+    assert_labels_apart,
+    assert_legends_outside,
+    assert_outlined,
+)
 from mpl_toolkits.mplot3d import Axes3D
 
 from quadnav.mission import Mission, MissionSettings, fly_mission
@@ -125,6 +131,35 @@ def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(missi
     (tmp_path / REPORT).write_text("an earlier run's report")
     assert write_run(mission, tmp_path, figures=False) == written[:-len(FIGURES) - 1]
     assert not any((tmp_path / name).exists() for name in (*FIGURES, REPORT))
+
+
+def test_write_run_draws_each_figure_once(mission, tmp_path, monkeypatch):
+    """What ``quadnav fly`` spends most of its figures' time on is drawing: each figure is
+    laid out without drawing it and drawn once, when it is saved (it was drawn 16 times
+    for 4 figures: each layout round and saving drew it, saving twice)."""
+    counter = DrawCounter(monkeypatch)
+    write_run(mission, tmp_path)
+    assert counter.of_figures() == [1] * len(FIGURES)
+
+
+def test_write_run_spares_the_collector_while_drawing_and_hands_everything_back(mission,
+                                                                              tmp_path):
+    """The objects alive before the figures are drawn are kept out of the garbage
+    collector's collections while they are (each full collection would walk them all
+    again), and handed back to it afterwards, so nothing stays out of its reach."""
+    frozen: list[int] = []
+
+    def watch(phase: str, info: dict) -> None:
+        if phase == "start":
+            frozen.append(gc.get_freeze_count())
+
+    gc.callbacks.append(watch)
+    try:
+        write_run(mission, tmp_path)
+    finally:
+        gc.callbacks.remove(watch)
+    assert max(frozen) > 0
+    assert gc.get_freeze_count() == 0
 
 
 def test_3d_figure_shows_an_oblique_3d_view_and_a_2d_top_view(run):

@@ -16,7 +16,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
 from quadnav import __version__
@@ -101,12 +100,9 @@ def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
 
 
 def png_bytes(fig: Figure) -> bytes:
-    """``fig`` as PNG bytes; the figure is closed."""
+    """``fig`` as PNG bytes."""
     buffer = io.BytesIO()
-    try:
-        fig.savefig(buffer, format="png")
-    finally:
-        plt.close(fig)
+    fig.savefig(buffer, format="png")
     return buffer.getvalue()
 
 

@@ -49,12 +49,13 @@ def _write_files(content: RunContent, staging: Path, folder: Path, figures: bool
     run = read_run(staging)
     if figures:  # plotting is imported only when drawn: --no-figures runs never load it
         from quadnav.report.html_report import write_report
-        from quadnav.viz.figures import save_figure
+        from quadnav.viz.figures import collector_spared, save_figure
         from quadnav.viz.flight_figures import figure_makers
 
         makers = figure_makers(run)
-        for name, make in makers.items():
-            save_figure(make(run), staging / name)
+        with collector_spared():
+            for name, make in makers.items():
+                save_figure(make(run), staging / name)
         write_report([run], staging / REPORT, shown=[folder])
         written += [*makers, REPORT]
     if html:

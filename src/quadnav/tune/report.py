@@ -18,7 +18,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -34,6 +33,7 @@ from quadnav.tune.evaluate import (
     SATURATION_WEIGHT,
 )
 from quadnav.tune.run import OWN, TUNED, Outcome, TuneRun
+from quadnav.viz.figures import new_figure
 
 #: Every file a tuning run writes.
 TUNE_FILES = ("gains.toml", "tune.json", "trials.csv", "report.html")
@@ -83,7 +83,8 @@ def _history_figure(outcome: Outcome) -> Figure:
     """Each trial's objective and the best so far, against the trial number."""
     numbers = np.array([trial.number for trial in outcome.trials])
     values = np.array([trial.value for trial in outcome.trials])
-    fig, ax = plt.subplots(figsize=(9, 3.6), dpi=120, layout="constrained")
+    fig = new_figure((9, 3.6))
+    ax = fig.subplots()
     ax.plot(numbers, values, "o", color="tab:blue", markersize=3.5, alpha=0.7, label="trial")
     ax.step(numbers, np.minimum.accumulate(values), where="post", color="tab:red",
             label="best so far")
@@ -103,8 +104,8 @@ def _errors_figure(outcome: Outcome, items: list[str]) -> Figure:
     flights crossed."""
     flights = outcome.flights["held-out"]
     names = list(flights)
-    fig, ax = plt.subplots(figsize=(11, 0.32 * len(items) + 1.6), dpi=120,
-                           layout="constrained")
+    fig = new_figure((11, 0.32 * len(items) + 1.6))
+    ax = fig.subplots()
     rows = np.arange(len(items))
     for name in names:
         errors = np.array([CM_PER_M * m["rms_tracking_error_m"] for m in flights[name]])

@@ -1,6 +1,6 @@
 """Figures: 3D views of worlds, plans, trajectories and flights, drawn with matplotlib.
 
-Importing this package leaves matplotlib's backend alone (a user's session keeps its
-own); the ``quadnav`` command draws off-screen with the Agg backend (``MPLBACKEND``),
-so it needs no display.
+Every figure is made without pyplot and drawn off-screen by an Agg canvas of its own
+(:func:`~quadnav.viz.figures.new_figure`), so drawing one leaves a user's pyplot session
+and backend alone, and needs no display.
 """

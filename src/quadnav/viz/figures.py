@@ -1,14 +1,31 @@
-"""Saving figures: checked file types, written whole or not at all."""
+"""Making and saving figures: each figure has an Agg canvas of its own (no pyplot, which
+keeps every figure open until it is closed, and costs its import); files are of checked
+types, written whole or not at all."""
 
 from __future__ import annotations
 
+import gc
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
+
+#: Resolution of the figures, dots per inch: they are drawn to be shown about 1100 pixels
+#: wide (the report's width).
+DPI = 120
+
+
+def new_figure(size: tuple[float, float]) -> Figure:
+    """An empty figure ``size`` (width, height) inches at :data:`DPI`, with a constrained
+    layout, drawn by its own Agg canvas."""
+    fig = Figure(figsize=size, dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def check_figure_path(path: str | Path) -> str:
@@ -24,10 +41,20 @@ def check_figure_path(path: str | Path) -> str:
 
 
 def save_figure(fig: Figure, path: str | Path) -> None:
-    """Save and close ``fig``; the file at ``path`` is either complete or untouched."""
+    """Save ``fig``; the file at ``path`` is either complete or untouched."""
     fmt = check_figure_path(path)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, format=fmt)
+
+
+@contextmanager
+def collector_spared() -> Iterator[None]:
+    """Keep the objects alive now (a command's imports and its run: hundreds of thousands)
+    out of the garbage collector's full collections while figures are made and saved,
+    which make so many short-lived objects that it collects again and again; they are
+    handed back to it afterwards, so nothing is kept that would have been freed."""
+    gc.freeze()
     try:
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, format=fmt)
+        yield
     finally:
-        plt.close(fig)
+        gc.unfreeze()

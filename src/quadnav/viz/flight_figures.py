@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
@@ -22,6 +21,7 @@ from quadnav.runs import DRIFT_FIGURE, FIGURES, FlightTable, Run, drift, run_out
 from quadnav.sim.flight import Ending
 from quadnav.sim.step_response import SETTLING_BAND
 from quadnav.vehicle.quaternion import euler_angles
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import map_legend
 from quadnav.viz.plan_figure import draw_tree
@@ -169,8 +169,8 @@ def flight_states_figure(run: Run) -> Figure:
     acceleration is :func:`actual_acceleration`. A step's response is marked on its
     axis (:func:`_mark_step`)."""
     flight = _flight(run)
-    fig, axes = plt.subplots(3, 3, figsize=(13, 8), dpi=120, sharex=True,
-                             layout="constrained")
+    fig = new_figure((13, 8))
+    axes = fig.subplots(3, 3, sharex=True)
     columns = (("position", "", "m", flight.reference, flight.position),
                ("velocity", "v", "m/s", desired_velocity(run), flight.velocity),
                ("acceleration", "a", "m/s²", desired_acceleration(run),
@@ -247,7 +247,8 @@ def tracking_error_figure(run: Run) -> Figure:
     error = CM_PER_M * tracking_error(flight)
     rms = CM_PER_M * metrics["rms_tracking_error_m"]
     duration = flight.t[-1]
-    fig, ax = plt.subplots(figsize=(10, 4), dpi=120, layout="constrained")
+    fig = new_figure((10, 4))
+    ax = fig.subplots()
     ax.plot(flight.t, error, color="tab:blue", linewidth=1.2, label="tracking error")
     ax.axhline(rms, color="black", linestyle="--", linewidth=0.8, label=f"RMS {rms:.2f} cm")
     peak = int(np.argmax(error))
@@ -277,8 +278,8 @@ def attitude_motors_figure(run: Run) -> Figure:
     trajectory.csv dashed) and the four motor commands (in [0, 1]) against time, one
     legend below."""
     flight = _flight(run)
-    fig, axes = plt.subplots(4, 1, figsize=(11, 9), dpi=120, sharex=True,
-                             layout="constrained")
+    fig = new_figure((11, 9))
+    axes = fig.subplots(4, 1, sharex=True)
     angles = np.degrees(euler_angles(flight.attitude))
     angles[:, 2] = np.degrees(np.unwrap(np.radians(angles[:, 2])))
     reference_yaw = np.degrees(np.unwrap(_desired(run, "yaw")))
@@ -311,7 +312,8 @@ def drift_figure(run: Run) -> Figure:
     the landing dashed and the drift at the landing, RMS and largest in the title."""
     flight, metrics = _flight(run), run.metrics
     drifts = CM_PER_M * drift(flight, run.truth)
-    fig, ax = plt.subplots(figsize=(10, 4), dpi=120, layout="constrained")
+    fig = new_figure((10, 4))
+    ax = fig.subplots()
     ax.plot(flight.t, drifts, color=TRUTH_COLOR, linewidth=1.2,
             label="estimate's distance from the truth")
     sigma, landing = metrics.get("landing_sigma_m"), metrics.get("landing_drift_m")

@@ -8,7 +8,6 @@ beside it. Legends stand outside the plots.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import PatchCollection
@@ -24,6 +23,7 @@ from quadnav.kinodynamic.diffdrive import (
 )
 from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.world2d import World2D
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.lines import draw_polylines
 from quadnav.viz.style import GOAL_COLOR, PATH_COLOR, START_COLOR, TREE_COLOR, outlined
@@ -114,8 +114,8 @@ def diffdrive_figure(world: World2D, result: KinoResult, model: DiffDrive,
                      ) -> Figure:
     """The plan on its world: tree arcs, centre path, wheel tracks, start and goal region
     (drawn when ``goal`` (2,) and ``goal_radius`` (m) are given), the legend beside."""
-    fig, ax = plt.subplots(figsize=map_figure_size(world, (1, 1), (LEGEND_ROOM, 0.0), 8.0),
-                           dpi=120, layout="constrained")
+    fig = new_figure(map_figure_size(world, (1, 1), (LEGEND_ROOM, 0.0), 8.0))
+    ax = fig.subplots()
     draw_diffdrive(ax, world, result, model, goal, goal_radius)
     fig.legend(handles=ax.get_legend_handles_labels()[0], loc="outside right upper",
                fontsize=8)
@@ -126,8 +126,8 @@ def diffdrive_figure(world: World2D, result: KinoResult, model: DiffDrive,
 def diffdrive_controls_figure(result: KinoResult, model: DiffDrive) -> Figure:
     """Speed and wheel speeds (m/s) above, turn rate (rad/s) below, against time (s)."""
     t, v, omega, left, right = control_profile(result, model)
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 6), dpi=120, sharex=True,
-                                      layout="constrained")
+    fig = new_figure((9, 6))
+    top, bottom = fig.subplots(2, 1, sharex=True)
     top.plot(t, v, color=PATH_COLOR, label="v (centre)")
     top.plot(t, left, color=LEFT_COLOR, linewidth=0.9, label="left wheel")
     top.plot(t, right, color=RIGHT_COLOR, linewidth=0.9, label="right wheel")
@@ -152,8 +152,8 @@ def biased_vs_unbiased_figure(world: World2D, biased_result: KinoResult,
     :data:`~quadnav.viz.topview.WIDE` map), iteration counts in the titles, one legend
     below."""
     grid = (2, 1) if world.extent[0] > WIDE * world.extent[1] else (1, 2)
-    fig, axes = plt.subplots(*grid, figsize=map_figure_size(world, grid, (0.0, 0.6), 12.0),
-                             dpi=120, layout="constrained")
+    fig = new_figure(map_figure_size(world, grid, (0.0, 0.6), 12.0))
+    axes = fig.subplots(*grid)
     for ax, result, label in ((axes[0], biased_result, "goal-biased"),
                               (axes[1], unbiased_result, "unbiased")):
         draw_diffdrive(ax, world, result, model, goal, goal_radius)

@@ -6,7 +6,6 @@ a few chords), not as straight lines between states.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -15,6 +14,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.kinodynamic.pointmass import SampledQuadrotor, exact_positions
 from quadnav.kinodynamic.result import KinoResult
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world, map_legend
@@ -52,7 +52,7 @@ def quadrotor_figure(world: World, result: KinoResult, model: SampledQuadrotor,
             (:func:`~quadnav.kinoflight.fly_kino_plan`), drawn dashed when the plan is
             solved.
     """
-    fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")
+    fig = new_figure((10, 7))
     ax = fig.add_subplot(projection="3d")
     if goal is None and result.solved:
         goal = result.states[-1, :3]
@@ -93,8 +93,8 @@ def quadrotor_controls_figure(result: KinoResult, model: SampledQuadrotor | None
                               ) -> Figure:
     """Roll and pitch (degrees) and thrust (N) against time as step plots, and the speed
     (m/s); with ``model``, its limits as dashed lines and the hover thrust dotted."""
-    fig, axes = plt.subplots(4, 1, figsize=(8, 8), dpi=120, sharex=True,
-                             layout="constrained")
+    fig = new_figure((8, 8))
+    axes = fig.subplots(4, 1, sharex=True)
     if not result.solved:
         axes[0].set_title(f"{result.planner}: goal not reached, no controls", fontsize=9)
         return finish(fig)

@@ -5,7 +5,8 @@ Matplotlib picks the ticks of a 3D axis without regard to how long the axis is d
 on a long thin map the short axes crowd eight labels into a few pixels, and it scales a
 3D box to a square axes whatever the box's shape, so a tall box pokes out of it (over
 the title). :func:`finish` zooms each 3D box to fit and then, round by round, finds the
-labels that overlap and rearranges those axes until none do.
+labels that overlap and rearranges those axes until none do. It lays the figure out
+without drawing it, and leaves the layout fixed, so that saving the figure draws it once.
 
 Legends are placed outside the axes by each figure (beside or below them, in the
 figure's constrained layout), so they never cover data.
@@ -18,6 +19,7 @@ from contextlib import contextmanager
 from itertools import combinations
 
 import numpy as np
+from matplotlib import rc_context
 from matplotlib.axes import Axes
 from matplotlib.axis import Axis
 from matplotlib.figure import Figure
@@ -73,7 +75,7 @@ def _box(text: Text, renderer) -> Bbox:
 def collisions(fig: Figure) -> list[tuple[Text, Text]]:
     """The pairs of labels of ``fig`` that overlap (with :data:`LABEL_GAP` between them),
     among the drawn tick labels and the axis labels of each of its axes. ``fig`` must
-    have been drawn."""
+    have been laid out (:func:`lay_out`) or drawn."""
     renderer = fig.canvas.get_renderer()
     found = []
     for ax in fig.axes:
@@ -86,7 +88,8 @@ def collisions(fig: Figure) -> list[tuple[Text, Text]]:
 
 
 def box_corners(ax: Axes3D) -> np.ndarray:
-    """(8, 2) pixels of the corners of ``ax``'s 3D box as drawn (after a draw)."""
+    """(8, 2) pixels of the corners of ``ax``'s 3D box as drawn (after a draw or
+    :func:`lay_out`)."""
     limits = (ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d())
     corners = np.array(np.meshgrid(*limits, indexing="ij")).reshape(3, -1)
     x, y, _ = proj3d.proj_transform(*corners, ax.get_proj())
@@ -98,7 +101,7 @@ def _fit_box(ax: Axes3D) -> bool:
     the axes (which matplotlib keeps square, and clips what is drawn in it to), its tick
     and axis labels (which a constrained layout leaves out of account in 3D) within as
     much of the axes' height and of the width the axes was given; whether the zoom
-    changed noticeably. ``ax`` must have been drawn."""
+    changed noticeably. ``ax`` must have been laid out (:func:`lay_out`) or drawn."""
     renderer = ax.figure.canvas.get_renderer()
     corners = box_corners(ax)
     low, high = corners.min(axis=0), corners.max(axis=0)
@@ -204,7 +207,7 @@ def _positions(fig: Figure) -> np.ndarray:
 @contextmanager
 def _layout_only(fig: Figure) -> Iterator[None]:
     """Hide the data of ``fig``'s axes (lines, collections, patches, images) for a while:
-    they do not move labels, and drawing them is most of a draw's time."""
+    they do not move labels, and measuring them would slow every round of the layout."""
     data = [artist for ax in fig.axes
             for artist in (*ax.lines, *ax.collections, *ax.patches, *ax.images)
             if artist.get_visible()]
@@ -217,21 +220,48 @@ def _layout_only(fig: Figure) -> Iterator[None]:
             artist.set_visible(True)
 
 
+def lay_out(fig: Figure) -> None:
+    """Place everything of ``fig`` where drawing it would, without drawing it: its layout
+    engine sizes and places the axes (measuring them: a 3D axes at its box's present
+    zoom), then each axes keeps its aspect in that place and places its ticks, tick
+    labels and axis labels there."""
+    renderer = fig.canvas.get_renderer()
+    for ax in fig.axes:
+        if isinstance(ax, Axes3D):  # the projection a draw would use (its zoom may be new)
+            ax.M = ax.get_proj()
+            ax.invM = np.linalg.inv(ax.M)
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        engine.execute(fig)
+    for ax in fig.axes:
+        ax.apply_aspect()
+        for axis in _axes_axes(ax):
+            axis.get_tightbbox(renderer)
+
+
+def _fix_layout(fig: Figure) -> None:
+    """Keep ``fig``'s layout as it is: drop its layout engine, so that saving draws it
+    once, as laid out (with the engine, or with the placeholder that
+    ``set_layout_engine("none")`` leaves, ``savefig`` lays it out and draws it twice)."""
+    with rc_context({"figure.autolayout": False, "figure.constrained_layout.use": False}):
+        fig.set_layout_engine(None)
+
+
 def finish(fig: Figure) -> Figure:
     """Fit every 3D box of ``fig`` to its axes and rearrange the labels until none
-    overlaps another (see :func:`collisions`); returns ``fig``. Call it last, when
-    everything is drawn.
+    overlaps another (see :func:`collisions`); returns ``fig``, laid out for good. Call it
+    last, when everything is drawn.
 
-    Round by round, ``fig`` is laid out and drawn (without its data, and without
-    rendering pixels) until its 3D boxes fit, no labels collide, and its layout has
-    settled (a 3D axes learns where its labels are only when drawn, so its layout lags a
-    draw behind)."""
+    Round by round, ``fig`` is laid out (:func:`lay_out`, without its data) until its 3D
+    boxes fit, no labels collide, and its layout has settled (a 3D axes' labels move
+    with the place the layout gives it, so its layout lags a round behind). Nothing is
+    drawn: the figure is drawn once, when it is saved."""
     three_d = [ax for ax in fig.axes if isinstance(ax, Axes3D)]
     with _layout_only(fig):
         before = None
         moves: dict[Axis, float] = {}
         for _ in range(MAX_ROUNDS):
-            fig.draw_without_rendering()
+            lay_out(fig)
             now = _positions(fig)
             settled = not three_d or (
                 before is not None and np.allclose(now, before, atol=LAYOUT_TOLERANCE))
@@ -243,5 +273,5 @@ def finish(fig: Figure) -> Figure:
                 _rearrange(fig, pairs, moves)
             elif settled:
                 break
-    fig.set_layout_engine("none")  # the layout is final: saving need not compute it again
+    _fix_layout(fig)
     return fig

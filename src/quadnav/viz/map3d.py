@@ -9,7 +9,6 @@ how much.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.legend import Legend
@@ -18,6 +17,7 @@ from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.style import GOAL_COLOR, START_COLOR
 from quadnav.world.model import World
@@ -116,7 +116,7 @@ def world_figure(world: World, start: np.ndarray | None = None,
                  goal: np.ndarray | None = None, title: str | None = None) -> Figure:
     """A figure of the world seen obliquely, with the legend beside it and the world's
     name as title."""
-    fig = plt.figure(figsize=(9, 7), dpi=120, layout="constrained")
+    fig = new_figure((9, 7))
     ax = fig.add_subplot(projection="3d")
     handles = draw_world(ax, world, start, goal)
     ax.view_init(elev=30, azim=-60)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
@@ -10,6 +9,7 @@ from matplotlib.lines import Line2D
 
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world, map_legend
@@ -38,7 +38,7 @@ def plan_figure(problem: PlanningProblem, result: PlanResult) -> Figure:
     """The world with the explored tree in a light colour, the path in red (outlined, so
     that it shows on red blocks), start and goal spheres, the legend beside; the title
     gives the planner, length and search statistics."""
-    fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")
+    fig = new_figure((10, 7))
     ax = fig.add_subplot(projection="3d")
     handles = draw_world(ax, problem.world, problem.start, problem.goal)
     tree = draw_tree(ax, result.tree_edges())

@@ -8,7 +8,6 @@ either kind of axes, so one function can fill an oblique 3D view and a top view 
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import PatchCollection
@@ -17,6 +16,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, Rectangle
 from mpl_toolkits.mplot3d import Axes3D
 
+from quadnav.viz.figures import new_figure
 from quadnav.viz.lines import draw_polylines
 from quadnav.viz.map3d import draw_world
 from quadnav.viz.style import GOAL_COLOR, START_COLOR
@@ -100,11 +100,10 @@ def two_views(world: World, size: tuple[float, float]) -> tuple[Figure, Axes3D, 
     width, depth = world.extent[:2]
     if width > WIDE * depth:
         top_height = size[0] * depth / width + TOP_MARGIN
-        fig = plt.figure(figsize=(size[0], size[1] + top_height), dpi=120,
-                         layout="constrained")
+        fig = new_figure((size[0], size[1] + top_height))
         grid = fig.add_gridspec(2, 1, height_ratios=(size[1], top_height))
     else:
-        fig = plt.figure(figsize=size, dpi=120, layout="constrained")
+        fig = new_figure(size)
         grid = fig.add_gridspec(1, 2)
     oblique = fig.add_subplot(grid[0], projection="3d")
     oblique.view_init(*OBLIQUE)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
@@ -10,6 +9,7 @@ from matplotlib.lines import Line2D
 from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
 from quadnav.trajectory.model import Trajectory
+from quadnav.viz.figures import new_figure
 from quadnav.viz.layout import finish
 from quadnav.viz.map3d import draw_world, map_legend
 from quadnav.viz.style import AXIS_COLORS, outlined
@@ -23,7 +23,7 @@ def trajectory_3d_figure(world: World, trajectory: Trajectory,
                          path: np.ndarray | None = None) -> Figure:
     """The map with the trajectory coloured by speed, its waypoints, and (dashed grey)
     the path it was made from; the colour bar and the legend beside."""
-    fig = plt.figure(figsize=(10, 7), dpi=120, layout="constrained")
+    fig = new_figure((10, 7))
     ax = fig.add_subplot(projection="3d")
     waypoints = trajectory.waypoints
     handles = draw_world(ax, world, waypoints[0], waypoints[-1])
@@ -57,8 +57,8 @@ def states_figure(trajectory: Trajectory, v_max: float | None = None,
     latter two, with their limits dashed), one legend below; waypoint times are
     marked."""
     t = np.linspace(0.0, trajectory.duration, max(int(DRAW_RATE * trajectory.duration), 2))
-    fig, axes = plt.subplots(3, 1, figsize=(9, 8), dpi=120, sharex=True,
-                             layout="constrained")
+    fig = new_figure((9, 8))
+    axes = fig.subplots(3, 1, sharex=True)
     rows = (("position", "m", None), ("velocity", "m/s", v_max),
             ("acceleration", "m/s²", a_max))
     for order, (ax, (name, unit, limit)) in enumerate(zip(axes, rows, strict=True)):
