@@ -239,9 +239,16 @@ def fly_row(context: BatchContext, mission: MissionSpec) -> dict:
     try:
         flown = fly_mission_spec(context, mission)
     except QuadnavError as error:
-        return mission_row(mission, _factors(mission), drawn, None, str(error),
-                           start, goal, mission_margin(context, mission))
+        return refused_row(context, mission, str(error))
     return mission_row(mission, _factors(mission), drawn, flown)
+
+
+def refused_row(context: BatchContext, mission: MissionSpec, reason: str) -> dict:
+    """The row of ``mission`` refused (or given up) for ``reason``: ``success`` false, the
+    reason in ``error`` and what is known of its query."""
+    start, goal = given_query(context, mission)
+    return mission_row(mission, _factors(mission), start is None or goal is None, None,
+                       reason, start, goal, mission_margin(context, mission))
 
 
 def _factors(mission: MissionSpec) -> tuple[float, float, float]:

@@ -9,11 +9,12 @@ when the run is stopped (Ctrl-C, SIGTERM), from every row finished by then.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from quadnav.batch.executor import open_executor
-from quadnav.batch.fly_one import fly_row, load_context, warm_up
+from quadnav.batch.fly_one import fly_row, load_context, refused_row, warm_up
 from quadnav.batch.folder import (
     batch_record,
     begin,
@@ -34,6 +35,8 @@ class BatchRun:
         missions: every mission of the batch, in the grid's order.
         rows: the finished rows by mission key (those of an earlier run first).
         todo: the missions still to fly.
+        retried: the missions this run flew again because the worker process flying them
+            died (None before it runs, or when it flew none).
     """
 
     def __init__(self, spec: BatchSpec, folder: str | Path, restart: bool = False) -> None:
@@ -49,6 +52,7 @@ class BatchRun:
             row["mission_key"]: row
             for row in finished_rows(self.folder, self.record, self.missions, restart)}
         self.todo = [m for m in self.missions if m.key not in self.rows]
+        self.retried: int | None = None
 
     def run(self, workers: int | None = None, ray: bool = False, address: str | None = None,
             on_start: Callable[[int, int], None] | None = None,
@@ -65,14 +69,16 @@ class BatchRun:
             on_row: called with each row as it is journaled.
 
         A stop (KeyboardInterrupt) or error still writes the outputs from the rows finished,
-        then goes on.
+        then goes on. A mission whose worker process died is flown again (at most
+        :data:`~quadnav.batch.executor.RETRIES` times, then its row is refused with the
+        reason), counted in :attr:`retried`.
         """
-        executor = None
+        executor = flying = None
         ran_on = None
         if self.todo:
-            executor = open_executor(self.context, warm_up,
-                                     min(workers, len(self.todo)) if workers else None,
-                                     ray, address)
+            executor = flying = open_executor(
+                self.context, warm_up, min(workers, len(self.todo)) if workers else None,
+                ray, address)
             ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
             begin(self.folder, self.record, self.restart, list(self.rows.values()))
@@ -81,7 +87,8 @@ class BatchRun:
                 if executor is not None:
                     if on_start is not None:
                         on_start(executor.workers, executor.numba_threads)
-                    for _, row in executor.map_unordered(fly_row, self.todo):
+                    for _, row in executor.map_unordered(fly_row, self.todo,
+                                                         partial(refused_row, self.context)):
                         journal.append(row)
                         self.rows[row["mission_key"]] = row
                         if on_row is not None:
@@ -93,8 +100,9 @@ class BatchRun:
                 raise
             finally:
                 journal.close()
+                self.retried = None if flying is None else flying.retried
                 written = write_outputs(self.folder, self.finished, len(self.missions),
-                                        ran_on)
+                                        ran_on, self.retried)
         finally:
             if executor is not None:
                 executor.close()

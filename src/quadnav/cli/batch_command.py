@@ -155,11 +155,20 @@ def batch(args: argparse.Namespace) -> int:
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
     _print_contenders(run.finished, folder)
-    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
+    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s{_retried(run)}")
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if args.compare:
         leaderboard(folder, run.finished, None)
     return 0
+
+
+def _retried(run: BatchRun) -> str:
+    """The end of the ``flew`` line: how many missions flew again because the worker
+    process flying them died, when any did."""
+    if not run.retried:
+        return ""
+    them = "it" if run.retried == 1 else "them"
+    return f"; {run.retried} flown again after the worker process flying {them} died"
 
 
 def _print_contenders(rows: list[dict], folder: Path) -> None:
