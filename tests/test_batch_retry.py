@@ -44,3 +44,15 @@ def test_a_job_that_kills_its_worker_every_time_is_an_error_without_a_lost_resul
         with pytest.raises(WorkerDiedError, match=f"died {RETRIES + 1} times"):
             next(jobs)
         assert executor.retried == 1
+
+
+def kill_worker(shared: object) -> None:
+    """A warm-up that kills its worker (SIGKILL)."""
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def test_a_worker_that_dies_as_it_starts_is_an_error_at_once():
+    with pytest.raises(WorkerDiedError,
+                       match=r"^a worker process died as it started \(killed by SIGKILL\)$"), \
+            LocalExecutor(shared=10, warm_up=kill_worker, workers=1) as executor:
+        list(executor.map_unordered(kill_worker_for, [1, 2]))

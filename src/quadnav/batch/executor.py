@@ -20,7 +20,9 @@ ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 A worker process that dies (killed by a signal or the OOM killer, a crash in compiled
 code, ``os._exit`` in a plug-in) loses only the job it ran: a new worker takes its place
 and the job runs again, at most :data:`RETRIES` times; a job whose worker dies every time
-is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`).
+is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`). A
+worker that dies before it has started (in its warm-up) is an error at once
+(:class:`WorkerDiedError`): another would die the same way.
 Each executor counts the jobs run again (:attr:`~_Base.retried`). A job's result depends
 only on its ``shared`` and ``item``, so a job run again gives the same result.
 
@@ -213,15 +215,21 @@ def _start_resource_tracker() -> None:
         signal.signal(signal.SIGHUP, held)
 
 
+#: What a local worker sends once it has started; and what :meth:`_Worker.receive` returns
+#: for a worker that died without answering.
+STARTED, DIED = "started", "died"
+
+
 def _serve(connection: Connection, shared: Any, warm_up: WarmUp | None, threads: int,
            parent: int) -> None:
-    """A local worker's process: start (:func:`_start_worker`), then answer each
-    ``(function, item)`` received on ``connection`` with ``(True, result)`` or, when the job
-    raised, ``(False, (error, traceback))``, until None or the parent's end is closed. A
-    warm-up that raised answers every job with its error."""
+    """A local worker's process: start (:func:`_start_worker`) and say so (:data:`STARTED`),
+    then answer each ``(function, item)`` received on ``connection`` with ``(True, result)``
+    or, when the job raised, ``(False, (error, traceback))``, until None or the parent's end
+    is closed. A warm-up that raised answers every job with its error."""
     failed = None
     try:
         _start_worker(shared, warm_up, threads, parent)
+        connection.send(STARTED)
     except Exception as error:
         failed = _failure(error)
     while True:
@@ -292,23 +300,28 @@ class _Worker:
         self.process.start()
         theirs.close()
         self.job: int | None = None
+        self.started = False
 
     def run(self, index: int, function: Job, item: Any) -> None:
         """Send job ``index``: ``function(shared, item)``. A worker that died meanwhile is
-        found by :meth:`answer`."""
+        found by :meth:`receive`."""
         self.job = index
         with suppress(OSError):  # BrokenPipeError: it died
             self.connection.send((function, item))
 
-    def answer(self) -> tuple[bool, Any] | None:
-        """The answer to the job sent (once the connection or the process is ready), or
-        None when the worker died without one."""
+    def receive(self) -> tuple[bool, Any] | str | None:
+        """The worker's answer to its job; None while it has not answered (noting that it
+        started, :attr:`started`, when it says so); :data:`DIED` when it died without an
+        answer."""
         try:
-            if self.connection.poll():
-                return self.connection.recv()
+            while self.connection.poll():
+                message = self.connection.recv()
+                if message != STARTED:
+                    return message
+                self.started = True
         except (EOFError, OSError):
-            pass
-        return None
+            return DIED
+        return None if self.process.is_alive() else DIED
 
     def end(self, cancel: bool) -> None:
         """End the worker: at once with ``cancel`` (it ignores stop signals: SIGKILL),
@@ -344,16 +357,18 @@ class LocalExecutor(_Base):
                     index = todo.popleft()
                     worker.run(index, function, items[index])
             busy = [worker for worker in self._pool if worker.job is not None]
-            ready = set(wait_for([*(w.connection for w in busy),
-                                  *(w.process.sentinel for w in busy)]))
+            wait_for([*(w.connection for w in busy), *(w.process.sentinel for w in busy)])
             for worker in busy:
-                if worker.connection not in ready and worker.process.sentinel not in ready:
+                answer = worker.receive()
+                if answer is None:
                     continue
-                index, answer = worker.job, worker.answer()
-                worker.job = None
-                if answer is not None:
+                index, worker.job = worker.job, None
+                if answer != DIED:
                     yield index, _result(answer)
                     continue
+                if not worker.started:  # not the job's doing: starting again would not help
+                    raise WorkerDiedError("a worker process died as it started "
+                                          f"({_end_of(worker.process)})")
                 cause = self._replace(worker)
                 if deaths.run_again(index):
                     todo.appendleft(index)
