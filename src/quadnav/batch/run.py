@@ -23,7 +23,7 @@ from quadnav.batch.folder import (
     write_outputs,
 )
 from quadnav.batch.grid import BatchSpec
-from quadnav.batch.table import RESULTS_CSV, Journal
+from quadnav.batch.table import RESULTS_CSV, Journal, compact_row
 
 
 class BatchRun:
@@ -89,6 +89,7 @@ class BatchRun:
                         on_start(executor.workers, executor.numba_threads)
                     for _, row in executor.map_unordered(fly_row, self.todo,
                                                          partial(refused_row, self.context)):
+                        row = compact_row(row)
                         journal.append(row)
                         self.rows[row["mission_key"]] = row
                         if on_row is not None:
