@@ -1,16 +1,20 @@
 """A small batch for the batch tests: 2 maps (a built-in world with its own start and goal,
 and a map file without, whose start and goal each seed draws) x 3 seeds at 2 m/s, with a
-short search budget; and its rows flown one by one in this process."""
+short search budget; and its rows flown one by one in this process. And a batch whose
+planner kills its worker process, once for one mission and every time for another."""
 
 from __future__ import annotations
 
 import functools
+import json
 from pathlib import Path
 
 import numba
+import pyarrow.parquet as pq
 
 from quadnav.batch.fly_one import fly_row, load_context
 from quadnav.batch.grid import read_spec
+from quadnav.batch.table import read_rows, same_row
 
 SPEC = """\
 seeds = 3
@@ -47,3 +51,65 @@ def rows_one_by_one(spec_path: Path) -> list[dict]:
 def numba_threads_in_worker(shared: object, item: object) -> int:
     """A job for an executor: the numba threads its worker's kernels run on."""
     return numba.get_num_threads()
+
+
+#: A plain planner (a straight path: the killer spec's map has no blocks) that kills its
+#: own process with SIGKILL when it plans for seed ``once`` the first time (in the process
+#: that makes the file ``marker``), and for seed ``always`` every time.
+KILLER = '''\
+import os
+import signal
+
+import numpy as np
+
+
+def plan(world, start, goal, margin, seed=0, once=-1, always=-1, marker=""):
+    if seed == always:
+        os.kill(os.getpid(), signal.SIGKILL)
+    if seed == once:
+        try:
+            os.close(os.open(marker, os.O_CREAT | os.O_EXCL))
+        except FileExistsError:
+            pass
+        else:
+            os.kill(os.getpid(), signal.SIGKILL)
+    return np.array([start, goal])
+'''
+#: Missions of the killer spec, and the seeds whose worker dies once and every time.
+KILLER_MISSIONS, KILLED_ONCE, KILLED_ALWAYS = 6, 1, 3
+
+
+def write_killer_spec(folder: Path) -> Path:
+    """A spec of :data:`KILLER_MISSIONS` missions in a room without blocks (a start and
+    goal drawn per seed) planned by :data:`KILLER`, whose marker is ``folder``/killed;
+    returns the spec's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "room.txt").write_text("boundary 0 0 0 6 6 3\n")
+    (folder / "killer.py").write_text(KILLER)
+    marker = folder / "killed"
+    path = folder / "spec.toml"
+    path.write_text(f"seeds = {KILLER_MISSIONS}\nspeeds = [2.0]\nmaps = [\"room.txt\"]\n"
+                    f"planners = [\"killer.py:plan(once={KILLED_ONCE}, "
+                    f"always={KILLED_ALWAYS}, marker='{marker}')\"]\n")
+    return path
+
+
+def assert_killer_table(spec_path: Path, out: Path, reason: str) -> None:
+    """The killer spec's batch in ``out`` has every mission once, in the grid's order: the
+    one killed once equal to the others flown here, the one killed every time a refused
+    row saying ``reason``; its summary counts both as retried."""
+    assert (spec_path.parent / "killed").exists()  # flying here kills no more
+    spec = read_spec(spec_path)
+    context = load_context(spec)
+    rows = read_rows(out / "results.csv")
+    assert [row["mission_key"] for row in rows] == [m.key for m in spec.missions()]
+    for row, mission in zip(rows, spec.missions(), strict=True):
+        if mission.seed == KILLED_ALWAYS:
+            assert (row["success"], row["path_found"], row["error"]) == (False, False, reason)
+            assert row["start_goal_drawn"] and row["start_x"] is None
+        else:
+            assert row["error"] is None and row["success"]
+            assert same_row(row, fly_row(context, mission))
+    assert pq.read_table(out / "results.parquet").to_pylist() == rows
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["retried"], summary["errors"], summary["complete"]) == (2, 1, True)

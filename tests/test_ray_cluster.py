@@ -2,7 +2,8 @@
 head with token authentication on and a second node, each a ``ray start`` of its own
 (tests/raycluster.py; one cluster for the module). A client without the cluster's token
 gets one line at once, saying so; with it, a batch runs across both nodes and gives the
-table of the missions flown one by one here, row for row."""
+table of the missions flown one by one here, row for row, also when Ray workers are killed
+mid-batch."""
 
 from __future__ import annotations
 
@@ -12,7 +13,13 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from batchtools import MISSIONS, rows_one_by_one, write_spec
+from batchtools import (
+    MISSIONS,
+    assert_killer_table,
+    rows_one_by_one,
+    write_killer_spec,
+    write_spec,
+)
 from clitools import assert_user_error
 from raycluster import client_environment, ray_cluster
 
@@ -85,6 +92,20 @@ def test_a_batch_across_two_nodes_gives_the_table_of_the_missions_flown_here(
            for node in ("head", "node1")}
     assert ran["head"] >= 1 and ran["node1"] >= 1, ran
     assert sum(ran.values()) == MISSIONS
+
+
+def test_a_killed_worker_of_the_cluster_loses_no_mission_and_one_killed_every_time_is_given_up(
+        cluster, tmp_path):
+    address, token, _ = cluster
+    spec = write_killer_spec(tmp_path / "spec")
+
+    result = quadnav(tmp_path, "batch", spec, "--ray", address, "--quiet", "-o",
+                     tmp_path / "out", RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=token)
+
+    assert result.returncode == 0, result.stderr
+    assert "; 2 flown again after the worker process flying them died" in result.stdout
+    assert_killer_table(spec, tmp_path / "out",
+                        "its worker process died 3 times (WorkerCrashedError); given up")
 
 
 def test_each_ray_task_runs_numba_on_one_thread(cluster, tmp_path):

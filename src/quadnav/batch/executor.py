@@ -10,11 +10,21 @@ finish, in any order::
         for index, result in executor.map_unordered(evaluate, items):
             ...
 
-Local (:class:`LocalExecutor`): a :class:`~concurrent.futures.ProcessPoolExecutor` whose
-workers are spawned (not forked: numba's compiled state and ``fork`` do not mix), each
-made once with ``shared`` and ``warm_up(shared)`` run in its initializer (import, load the
-compiled kernels). Workers ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
+Local (:class:`LocalExecutor`): ``workers`` processes, spawned (not forked: numba's
+compiled state and ``fork`` do not mix), each made once with ``shared`` and
+``warm_up(shared)`` run as it starts (import, load the compiled kernels), then given one
+job at a time through a pipe of its own, so the parent knows which job each runs. Workers
+ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 :meth:`~LocalExecutor.close` with ``cancel`` ends the workers at once.
+
+A worker process that dies (killed by a signal or the OOM killer, a crash in compiled
+code, ``os._exit`` in a plug-in) loses only the job it ran: a new worker takes its place
+and the job runs again, at most :data:`RETRIES` times; a job whose worker dies every time
+is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`). A
+worker that dies before it has started (in its warm-up) is an error at once
+(:class:`WorkerDiedError`): another would die the same way.
+Each executor counts the jobs run again (:attr:`~_Base.retried`). A job's result depends
+only on its ``shared`` and ``item``, so a job run again gives the same result.
 
 Each worker runs its numba kernels on the threads :func:`~quadnav.batch.threads.numba_threads`
 gives (one per worker unless a single local worker has the machine), set in the worker
@@ -24,7 +34,8 @@ Ray (:class:`RayExecutor`, the optional ``quadnav[ray]``; imported only here, on
 asked for): ``ray.init(address=...)``, or a local Ray started for the run without an
 address; ``shared`` goes to the object store once (``ray.put``) and each worker process
 reads it once; one remote task per item, results taken with ``ray.wait`` as they finish.
-A job's result depends only on its ``shared`` and ``item``, so both give the same results.
+A task whose worker process or node dies is submitted again, as a local job is run
+again (Ray's own retries are off, so that each is counted). Both give the same results.
 """
 
 from __future__ import annotations
@@ -37,10 +48,14 @@ import socket
 import sys
 import threading
 import time
+import traceback
+from collections import Counter, deque
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from multiprocessing import resource_tracker
+from multiprocessing.connection import Connection
+from multiprocessing.connection import wait as wait_for
+from multiprocessing.process import BaseProcess
 from types import TracebackType
 from typing import Any, Protocol
 
@@ -52,6 +67,9 @@ from quadnav.signals import STOP_SIGNALS
 Job = Callable[[Any, Any], Any]
 #: ``warm_up(shared)``: run once in each worker before its first job.
 WarmUp = Callable[[Any], None]
+#: ``lost(item, reason) -> result``: the result of a job given up because its worker
+#: process died each time it ran, ``reason`` saying so in words.
+Lost = Callable[[Any, str], Any]
 
 
 def cpu_count() -> int:
@@ -68,10 +86,16 @@ class Executor(Protocol):
     workers: int
     #: numba threads of each worker process
     numba_threads: int
+    #: jobs run again because the worker process running them died (so far)
+    retried: int
+    #: the items of those jobs
+    retried_jobs: list[Any]
 
-    def map_unordered(self, function: Job, items: Sequence[Any]
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
                       ) -> Iterator[tuple[int, Any]]:
-        """``(index, function(shared, items[index]))`` for every item, as each finishes."""
+        """``(index, function(shared, items[index]))`` for every item, as each finishes.
+        A job whose worker process dies is run again, at most :data:`RETRIES` times; then
+        its result is ``lost(item, reason)`` (WorkerDiedError without ``lost``)."""
 
     def close(self, cancel: bool = False) -> None:
         """Release the workers; with ``cancel``, at once, dropping unfinished jobs."""
@@ -82,9 +106,31 @@ class Executor(Protocol):
                  traceback: TracebackType | None) -> None: ...
 
 
-class _Closing:
-    """Context manager protocol: leaving the block closes the executor, cancelling the
-    unfinished jobs when it ends with an exception (an error, Ctrl-C)."""
+class _Base:
+    """What both executors share: the context manager protocol (leaving the block closes
+    the executor, cancelling the unfinished jobs when it ends with an exception: an error,
+    Ctrl-C) and the count of jobs run again (:attr:`retried`)."""
+
+    def __init__(self) -> None:
+        self._calls: list[_Deaths] = []
+
+    def _deaths(self, items: Sequence[Any], lost: Lost | None) -> _Deaths:
+        """The worker deaths of a new :meth:`map_unordered` call's jobs."""
+        self._calls.append(_Deaths(items, lost))
+        return self._calls[-1]
+
+    @property
+    def retried(self) -> int:
+        """The jobs run again because the worker process running them died, so far."""
+        return sum(len(deaths.counts) for deaths in self._calls)
+
+    @property
+    def retried_jobs(self) -> list[Any]:
+        """The items of the jobs counted in :attr:`retried`."""
+        return [deaths.items[index] for deaths in self._calls for index in deaths.counts]
+
+    def close(self, cancel: bool = False) -> None:
+        raise NotImplementedError
 
     def __enter__(self):
         return self
@@ -92,6 +138,42 @@ class _Closing:
     def __exit__(self, kind: type[BaseException] | None, error: BaseException | None,
                  traceback: TracebackType | None) -> None:
         self.close(cancel=kind is not None)
+
+
+# ------------------------------------------------------------------------- worker deaths
+#: How many times a job is run again after the worker process running it died (killed by
+#: a signal, the OOM killer, a crash in compiled code, ``os._exit``) before it is given up.
+RETRIES = 2
+
+
+class WorkerDiedError(QuadnavError):
+    """A job whose worker process died each of the :data:`RETRIES` + 1 times it ran, when
+    the caller gave no ``lost`` result for it (exit code 1: a failed run, not bad input)."""
+
+    exit_code = 1
+
+
+class _Deaths:
+    """The worker deaths of the jobs of one :meth:`Executor.map_unordered` call."""
+
+    def __init__(self, items: Sequence[Any], lost: Lost | None) -> None:
+        self.items = items
+        self.lost = lost
+        self.counts: Counter[int] = Counter()
+
+    def run_again(self, index: int) -> bool:
+        """Count a death of job ``index``'s worker; whether to run the job again."""
+        self.counts[index] += 1
+        return self.counts[index] <= RETRIES
+
+    def given_up(self, index: int, cause: str) -> Any:
+        """The result of job ``index``, given up after its worker's last death of
+        ``cause``: ``lost(item, reason)``, or WorkerDiedError without ``lost``."""
+        reason = f"its worker process died {RETRIES + 1} times ({cause}); given up"
+        if self.lost is None:
+            raise WorkerDiedError(f"a job's worker process died {RETRIES + 1} times ({cause}); "
+                             "given up")
+        return self.lost(self.items[index], reason)
 
 
 # ------------------------------------------------------------------------------- local
@@ -103,8 +185,8 @@ PARENT_CHECK_PERIOD = 0.5
 
 
 def _start_worker(shared: Any, warm_up: WarmUp | None, threads: int, parent: int) -> None:
-    """Initializer of a local worker: ignore stop signals, leave when ``parent`` (the
-    batch's process id) is gone, set numba's ``threads``, keep ``shared``, warm up."""
+    """Start a local worker: ignore stop signals, leave when ``parent`` (the batch's
+    process id) is gone, set numba's ``threads``, keep ``shared``, warm up."""
     global _shared
     for signum in STOP_SIGNALS:
         signal.signal(signum, signal.SIG_IGN)
@@ -126,10 +208,10 @@ def _leave_with(parent: int) -> None:
 
 
 def _start_resource_tracker() -> None:
-    """Start multiprocessing's resource tracker (which the pool's queues and locks use)
-    ignoring every stop signal, as the workers do: it ignores SIGINT and SIGTERM itself,
-    but a SIGHUP to the whole process group (a closed terminal) ended it, and multiprocessing
-    then printed a traceback and "process died unexpectedly ... resources might leak". An
+    """Start multiprocessing's resource tracker (which spawning a process starts) ignoring
+    every stop signal, as the workers do: it ignores SIGINT and SIGTERM itself, but a SIGHUP
+    to the whole process group (a closed terminal) ended it, and multiprocessing then
+    printed a traceback and "process died unexpectedly ... resources might leak". An
     ignored signal stays ignored in the process started now."""
     if not hasattr(signal, "SIGHUP"):
         return
@@ -140,44 +222,177 @@ def _start_resource_tracker() -> None:
         signal.signal(signal.SIGHUP, held)
 
 
-def _call(function: Job, item: Any) -> Any:
-    return function(_shared, item)
+#: What a local worker sends once it has started; and what :meth:`_Worker.receive` returns
+#: for a worker that died without answering.
+STARTED, DIED = "started", "died"
 
 
-class LocalExecutor(_Closing):
+def _serve(connection: Connection, shared: Any, warm_up: WarmUp | None, threads: int,
+           parent: int) -> None:
+    """A local worker's process: start (:func:`_start_worker`) and say so (:data:`STARTED`),
+    then answer each ``(function, item)`` received on ``connection`` with ``(True, result)``
+    or, when the job raised, ``(False, (error, traceback))``, until None or the parent's end
+    is closed. A warm-up that raised answers every job with its error."""
+    failed = None
+    try:
+        _start_worker(shared, warm_up, threads, parent)
+        connection.send(STARTED)
+    except Exception as error:
+        failed = _failure(error)
+    while True:
+        try:
+            task = connection.recv()
+        except EOFError:
+            return
+        if task is None:
+            return
+        if failed is not None:
+            reply = failed
+        else:
+            function, item = task
+            try:
+                reply = (True, function(_shared, item))
+            except Exception as error:
+                reply = _failure(error)
+        try:
+            connection.send(reply)
+        except Exception as error:  # a result that cannot be pickled
+            connection.send(_failure(error))
+
+
+def _failure(error: Exception) -> tuple[bool, tuple[Exception, str]]:
+    """A worker's answer for a job that raised ``error`` (in its ``except`` block)."""
+    return False, (error, traceback.format_exc())
+
+
+def _result(answer: tuple[bool, Any]) -> Any:
+    """The result in a worker's ``answer``; the job's exception raised again, with the
+    worker's traceback as its cause, when it raised one."""
+    done, value = answer
+    if not done:
+        error, trace = value
+        raise error from _RemoteTracebackError(trace)
+    return value
+
+
+class _RemoteTracebackError(Exception):
+    """The traceback of a job's exception in its worker, as the cause of the exception
+    raised again in the parent."""
+
+    def __str__(self) -> str:
+        return f"\n\"\"\"\n{self.args[0]}\"\"\""
+
+
+def _end_of(process: BaseProcess) -> str:
+    """How a worker process that is gone ended, in words."""
+    process.join()
+    code = process.exitcode
+    if code is not None and code < 0:
+        try:
+            return f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            return f"killed by signal {-code}"
+    return f"exit code {code}"
+
+
+class _Worker:
+    """A local worker process (:func:`_serve`), the parent's end of its connection and the
+    index of the job it runs (None when idle)."""
+
+    def __init__(self, arguments: tuple) -> None:
+        spawn = multiprocessing.get_context("spawn")
+        self.connection, theirs = spawn.Pipe()
+        self.process = spawn.Process(target=_serve, args=(theirs, *arguments),
+                                     name="quadnav-worker")
+        self.process.start()
+        theirs.close()
+        self.job: int | None = None
+        self.started = False
+
+    def run(self, index: int, function: Job, item: Any) -> None:
+        """Send job ``index``: ``function(shared, item)``. A worker that died meanwhile is
+        found by :meth:`receive`."""
+        self.job = index
+        with suppress(OSError):  # BrokenPipeError: it died
+            self.connection.send((function, item))
+
+    def receive(self) -> tuple[bool, Any] | str | None:
+        """The worker's answer to its job; None while it has not answered (noting that it
+        started, :attr:`started`, when it says so); :data:`DIED` when it died without an
+        answer."""
+        try:
+            while self.connection.poll():
+                message = self.connection.recv()
+                if message != STARTED:
+                    return message
+                self.started = True
+        except (EOFError, OSError):
+            return DIED
+        return None if self.process.is_alive() else DIED
+
+    def end(self, cancel: bool) -> None:
+        """End the worker: at once with ``cancel`` (it ignores stop signals: SIGKILL),
+        else once it has finished its job."""
+        if cancel:
+            self.process.kill()
+        else:
+            with suppress(OSError):
+                self.connection.send(None)
+        self.process.join()
+        self.connection.close()
+
+
+class LocalExecutor(_Base):
     """Jobs on ``workers`` local processes (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
                  workers: int | None = None, threads: int | None = None) -> None:
         self.workers = workers or cpu_count()
         self.numba_threads = threads or numba_threads(self.workers)
+        super().__init__()
         _start_resource_tracker()
-        self._pool = ProcessPoolExecutor(
-            self.workers, mp_context=multiprocessing.get_context("spawn"),
-            initializer=_start_worker,
-            initargs=(shared, warm_up, self.numba_threads, os.getpid()))
+        self._arguments = (shared, warm_up, self.numba_threads, os.getpid())
+        self._pool = [_Worker(self._arguments) for _ in range(self.workers)]
 
-    def map_unordered(self, function: Job, items: Sequence[Any]
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
                       ) -> Iterator[tuple[int, Any]]:
-        pending: dict[Future, int] = {self._pool.submit(_call, function, item): index
-                                      for index, item in enumerate(items)}
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                yield pending.pop(future), future.result()
+        todo = deque(range(len(items)))
+        deaths = self._deaths(items, lost)
+        while todo or any(worker.job is not None for worker in self._pool):
+            for worker in self._pool:
+                if worker.job is None and todo:
+                    index = todo.popleft()
+                    worker.run(index, function, items[index])
+            busy = [worker for worker in self._pool if worker.job is not None]
+            wait_for([*(w.connection for w in busy), *(w.process.sentinel for w in busy)])
+            for worker in busy:
+                answer = worker.receive()
+                if answer is None:
+                    continue
+                index, worker.job = worker.job, None
+                if answer != DIED:
+                    yield index, _result(answer)
+                    continue
+                if not worker.started:  # not the job's doing: starting again would not help
+                    raise WorkerDiedError("a worker process died as it started "
+                                          f"({_end_of(worker.process)})")
+                cause = self._replace(worker)
+                if deaths.run_again(index):
+                    todo.appendleft(index)
+                else:
+                    yield index, deaths.given_up(index, cause)
+
+    def _replace(self, worker: _Worker) -> str:
+        """Put a new worker in the place of ``worker``, which died; returns how it ended."""
+        cause = _end_of(worker.process)
+        worker.connection.close()
+        self._pool[self._pool.index(worker)] = _Worker(self._arguments)
+        return cause
 
     def close(self, cancel: bool = False) -> None:
-        if cancel:
-            # The workers ignore stop signals: end them at once. (Python 3.14 has
-            # ProcessPoolExecutor.kill_workers for this.)
-            processes = list(getattr(self._pool, "_processes", {}).values())
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            for process in processes:
-                process.kill()
-            for process in processes:
-                process.join()
-        else:
-            self._pool.shutdown(wait=True)
+        for worker in self._pool:
+            worker.end(cancel)
+        self._pool = []
 
 
 # --------------------------------------------------------------------------------- Ray
@@ -294,13 +509,14 @@ def check_authenticated(address: str) -> None:
                            f"{str(error).strip().splitlines()[0]}") from None
 
 
-class RayExecutor(_Closing):
+class RayExecutor(_Base):
     """Jobs as Ray tasks on the cluster at ``address``, or on a local Ray of ``workers``
     CPUs started for the run when ``address`` is None (see the module docstring)."""
 
     def __init__(self, shared: Any, warm_up: WarmUp | None = None,
                  address: str | None = None, workers: int | None = None,
                  threads: int | None = None) -> None:
+        super().__init__()
         ray = self._ray = _import_ray()
         options: dict[str, Any] = {"logging_level": logging.WARNING, "log_to_driver": False,
                                    "configure_logging": True}
@@ -319,20 +535,36 @@ class RayExecutor(_Closing):
         self.numba_threads = threads or numba_threads(self.workers, ray=True)
         self._shared = [ray.put(shared)]
         self._warm_up = warm_up
-        self._task = ray.remote(num_cpus=1)(_ray_job)
+        # max_retries=0: a task whose worker died is submitted again here, and counted
+        self._task = ray.remote(num_cpus=1, max_retries=0)(_ray_job)
         self._pending: dict[Any, int] = {}
 
-    def map_unordered(self, function: Job, items: Sequence[Any]
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
                       ) -> Iterator[tuple[int, Any]]:
         ray = self._ray
-        self._pending = {self._task.remote(function, self._shared, self._warm_up,
-                                           self.numba_threads, item): index
-                         for index, item in enumerate(items)}
+        died = (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError,
+                ray.exceptions.LocalRayletDiedError)
+        deaths = self._deaths(items, lost)
+
+        def submit(index: int) -> None:
+            self._pending[self._task.remote(function, self._shared, self._warm_up,
+                                            self.numba_threads, items[index])] = index
+
+        self._pending = {}
+        for index in range(len(items)):
+            submit(index)
         while self._pending:
             done, _ = ray.wait(list(self._pending), num_returns=1)
             for ref in done:
                 index = self._pending.pop(ref)
-                yield index, ray.get(ref)
+                try:
+                    result = ray.get(ref)
+                except died as error:
+                    if deaths.run_again(index):
+                        submit(index)
+                        continue
+                    result = deaths.given_up(index, type(error).__name__)
+                yield index, result
 
     def close(self, cancel: bool = False) -> None:
         if cancel:

@@ -280,10 +280,23 @@ def flown_row(context: BatchContext, mission: MissionSpec, cache: StageCache | N
     try:
         flown = fly_mission_spec(context, mission, cache)
     except QuadnavError as error:
-        return mission_row(mission, _factors(mission), drawn, None, str(error),
-                           start, goal, mission_margin(context, mission))
+        return refused_row(context, mission, str(error))
     key = plan_key(context.world_hashes[mission.map.map], flown.problem, flown.settings)
     return mission_row(mission, _factors(mission), drawn, flown, plan_key=key)
+
+
+def refused_row(context: BatchContext, mission: MissionSpec, reason: str) -> dict:
+    """The row of ``mission`` refused (or given up) for ``reason``: ``success`` false, the
+    reason in ``error`` and what is known of its query."""
+    start, goal = given_query(context, mission)
+    return mission_row(mission, _factors(mission), start is None or goal is None, None,
+                       reason, start, goal, mission_margin(context, mission))
+
+
+def refused_rows(context: BatchContext, missions: list[MissionSpec], reason: str
+                 ) -> list[dict]:
+    """The rows of a job of ``missions`` (:func:`fly_rows`) given up for ``reason``."""
+    return [refused_row(context, mission, reason) for mission in missions]
 
 
 def _factors(mission: MissionSpec) -> tuple[float, float, float]:

@@ -174,12 +174,13 @@ def ordered_rows(missions: Sequence[MissionSpec], rows: dict[str, dict[str, Any]
 
 
 def write_outputs(folder: Path, rows: list[dict[str, Any]], expected: int,
-                  ran_on: dict[str, int] | None = None) -> list[str]:
+                  ran_on: dict[str, int] | None = None, retried: int | None = None
+                  ) -> list[str]:
     """Write the tables, ``summary.json`` and ``summary.html`` of ``rows`` (``expected``:
-    the batch's size; ``ran_on``: see :func:`~.summary.summary`); returns the file names
-    written."""
+    the batch's size; ``ran_on``, ``retried``: see :func:`~.summary.summary`); returns the
+    file names written."""
     written = write_tables(rows, folder)
-    content = summary(rows, expected, ran_on)
+    content = summary(rows, expected, ran_on, retried)
     write_summary(content, folder / SUMMARY_JSON)
     write_summary_page(content, rows, folder)
     return [*written, SUMMARY_JSON, SUMMARY_HTML]

@@ -15,11 +15,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from quadnav.batch.executor import cpu_count, open_executor
-from quadnav.batch.fly_one import fly_rows, load_context, warm_up
+from quadnav.batch.fly_one import fly_rows, load_context, refused_rows, warm_up
 from quadnav.batch.folder import (
     PLANS,
     batch_record,
@@ -29,7 +30,7 @@ from quadnav.batch.folder import (
     write_outputs,
 )
 from quadnav.batch.grid import BatchSpec, MissionSpec
-from quadnav.batch.table import RESULTS_CSV, Journal
+from quadnav.batch.table import RESULTS_CSV, Journal, compact_row
 
 #: Jobs per worker a batch is cut into at least, when its missions allow: a group of
 #: missions that share a plan is cut (each part planning again) so that every worker has
@@ -64,6 +65,8 @@ class BatchRun:
         missions: every mission of the batch, in the grid's order.
         rows: the finished rows by mission key (those of an earlier run first).
         todo: the missions still to fly.
+        retried: the missions this run flew again because the worker process flying them
+            died (None before it runs, or when it flew none).
     """
 
     def __init__(self, spec: BatchSpec, folder: str | Path, restart: bool = False) -> None:
@@ -79,6 +82,7 @@ class BatchRun:
             row["mission_key"]: row
             for row in finished_rows(self.folder, self.record, self.missions, restart)}
         self.todo = [m for m in self.missions if m.key not in self.rows]
+        self.retried: int | None = None
 
     def run(self, workers: int | None = None, ray: bool = False, address: str | None = None,
             on_start: Callable[[int, int], None] | None = None,
@@ -95,17 +99,19 @@ class BatchRun:
             on_row: called with each row as it is journaled.
 
         A stop (KeyboardInterrupt) or error still writes the outputs from the rows finished,
-        then goes on.
+        then goes on. A mission whose worker process died is flown again (at most
+        :data:`~quadnav.batch.executor.RETRIES` times, then its row is refused with the
+        reason), counted in :attr:`retried`.
         """
-        executor = None
+        executor = flying = None
         ran_on = None
         jobs = plan_jobs(self.todo, workers or cpu_count())
         if jobs:
             # the plans kept on disk where the workers share the driver's disk
             plans = None if ray and address is not None else self.folder / PLANS
-            executor = open_executor(replace(self.context, plans=plans), warm_up,
-                                     min(workers, len(jobs)) if workers else None,
-                                     ray, address)
+            executor = flying = open_executor(replace(self.context, plans=plans), warm_up,
+                                              min(workers, len(jobs)) if workers else None,
+                                              ray, address)
             ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
             begin(self.folder, self.record, self.restart, list(self.rows.values()))
@@ -114,8 +120,10 @@ class BatchRun:
                 if executor is not None:
                     if on_start is not None:
                         on_start(executor.workers, executor.numba_threads)
-                    for _, rows in executor.map_unordered(fly_rows, jobs):
+                    for _, rows in executor.map_unordered(
+                            fly_rows, jobs, partial(refused_rows, self.context)):
                         for row in rows:
+                            row = compact_row(row)
                             journal.append(row)
                             self.rows[row["mission_key"]] = row
                             if on_row is not None:
@@ -127,8 +135,10 @@ class BatchRun:
                 raise
             finally:
                 journal.close()
+                self.retried = (None if flying is None
+                                else sum(len(job) for job in flying.retried_jobs))
                 written = write_outputs(self.folder, self.finished, len(self.missions),
-                                        ran_on)
+                                        ran_on, self.retried)
         finally:
             if executor is not None:
                 executor.close()

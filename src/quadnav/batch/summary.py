@@ -88,12 +88,15 @@ def groups(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def summary(rows: Sequence[dict[str, Any]], expected: int,
-            ran_on: dict[str, int] | None = None) -> dict[str, Any]:
+            ran_on: dict[str, int] | None = None, retried: int | None = None
+            ) -> dict[str, Any]:
     """The whole summary: the overall rate over ``rows``, how many of the ``expected``
     missions they are, where this run flew its missions (``ran_on``: ``workers`` and the
-    ``numba_threads`` of each; None when it flew none) and :func:`groups`."""
+    ``numba_threads`` of each; None when it flew none), how many of them it flew again
+    because the worker process flying them died (``retried``; None when it flew none) and
+    :func:`groups`."""
     return {"missions": expected, "finished": len(rows), "complete": len(rows) == expected,
-            **rate(rows), "ran_on": ran_on, "groups": groups(rows)}
+            **rate(rows), "ran_on": ran_on, "retried": retried, "groups": groups(rows)}
 
 
 def write_summary(content: dict[str, Any], path: Path) -> None:

@@ -13,8 +13,9 @@ whatever rows failed.
 The journal is ``DIR/results.csv`` itself: each finished row is appended and flushed at
 once, so a run stopped by any means, SIGKILL included, keeps every finished row (a last
 line cut short by a kill is dropped when the journal is read back). At the end (or on a
-stop) ``results.csv`` is rewritten whole in the grid's order and ``results.parquet``
-written, both atomically.
+stop) ``results.csv`` is rewritten whole in the grid's order, a line at a time, and
+``results.parquet`` written in row groups of :data:`ROW_GROUP_ROWS` rows, a group at a
+time, both atomically.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import csv
 import io
 import math
 import os
+import sys
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -121,6 +123,14 @@ def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn
     for name in POINTS:
         row |= _point_columns(name, metrics[name])
     return row
+
+
+def compact_row(row: dict[str, Any]) -> dict[str, Any]:
+    """``row`` keyed by the names of :data:`NAMES` themselves, its texts interned: a row
+    unpickled from a worker has a copy of its own of every column name and text, about
+    5 of its 7 KB, which a batch that keeps every row would keep for each."""
+    return {name: sys.intern(value) if isinstance(value, str) else value
+            for name, value in zip(NAMES, map(row.__getitem__, NAMES), strict=True)}
 
 
 def mission_columns(mission: MissionSpec) -> dict[str, Any]:
@@ -261,32 +271,44 @@ class Journal:
             self._file = None
 
 
-def write_tables(rows: Iterable[dict[str, Any]], folder: Path) -> list[str]:
-    """Write ``rows`` to ``folder``/results.csv and results.parquet, each atomically;
+def write_tables(rows: Sequence[dict[str, Any]], folder: Path,
+                 group_rows: int | None = None) -> list[str]:
+    """Write ``rows`` to ``folder``/results.csv and results.parquet, each atomically, the
+    Parquet file in row groups of ``group_rows`` (default :data:`ROW_GROUP_ROWS`);
     returns the names written."""
-    rows = list(rows)
     write_csv(rows, folder / RESULTS_CSV)
-    write_parquet(rows, folder / RESULTS_PARQUET)
+    write_parquet(rows, folder / RESULTS_PARQUET, group_rows or ROW_GROUP_ROWS)
     return [RESULTS_PARQUET, RESULTS_CSV]
 
 
-def write_csv(rows: Sequence[dict[str, Any]], path: Path) -> None:
-    """The rows as a results.csv, atomically."""
-    with atomic_output(path) as tmp:
-        tmp.write_text(HEADER + "".join(csv_line(row) for row in rows), encoding="utf-8")
+def write_csv(rows: Iterable[dict[str, Any]], path: Path) -> None:
+    """The rows as a results.csv, atomically, a line at a time."""
+    with atomic_output(path) as tmp, tmp.open("w", encoding="utf-8") as file:
+        file.write(HEADER)
+        file.writelines(csv_line(row) for row in rows)
 
 
-def write_parquet(rows: list[dict[str, Any]], path: Path) -> None:
-    """The rows as a Parquet file with the schema :data:`COLUMNS`, atomically."""
+#: Rows of each row group of results.parquet: the file is written a group at a time, so
+#: writing it holds one group's columns beside the rows, not a copy of the whole table.
+ROW_GROUP_ROWS = 4096
+
+
+def write_parquet(rows: Sequence[dict[str, Any]], path: Path,
+                  group_rows: int = ROW_GROUP_ROWS) -> None:
+    """The rows as a Parquet file with the schema :data:`COLUMNS`, atomically, in row
+    groups of ``group_rows`` rows."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     schema = pa.schema([(name, pa.from_numpy_dtype(np.dtype(kind)) if kind != STR
                          else pa.string()) for name, kind in COLUMNS])
-    columns = {name: [_plain(row[name], TYPES[name]) for row in rows] for name in NAMES}
-    table = pa.Table.from_pydict(columns, schema=schema)
-    with atomic_output(path) as tmp:
-        pq.write_table(table, tmp)
+    with atomic_output(path) as tmp, pq.ParquetWriter(tmp, schema) as writer:
+        for first in range(0, len(rows), group_rows):
+            group = rows[first:first + group_rows]
+            columns = {name: [_plain(row[name], TYPES[name]) for row in group]
+                       for name in NAMES}
+            writer.write_table(pa.Table.from_pydict(columns, schema=schema),
+                               row_group_size=group_rows)
 
 
 def _plain(value: Any, kind: str) -> Any:

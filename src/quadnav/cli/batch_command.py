@@ -99,6 +99,9 @@ class _Progress:
         self.where = where
         self.quiet = quiet
         self.bar: tqdm | None = None
+        # counted as rows come (a rate over every row at each row took O(N^2) time)
+        self.finished = len(run.rows)
+        self.successes = sum(bool(row["success"]) for row in run.rows.values())
 
     def started(self, workers: int, threads: int) -> None:
         run = self.run
@@ -109,10 +112,11 @@ class _Progress:
                                 dynamic_ncols=True)
 
     def row(self, row: dict) -> None:
-        finished = rate(list(self.run.rows.values()))
+        self.finished += 1
+        self.successes += bool(row["success"])
         assert self.bar is not None
-        self.bar.set_postfix_str(f"success {100 * finished['success_rate']:.1f} % of "
-                                 f"{finished['n']}", refresh=False)
+        self.bar.set_postfix_str(f"success {100 * self.successes / self.finished:.1f} % of "
+                                 f"{self.finished}", refresh=False)
         self.bar.update(1)
 
     def close(self) -> None:
@@ -155,11 +159,20 @@ def batch(args: argparse.Namespace) -> int:
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
     _print_contenders(run.finished, folder)
-    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s")
+    print(f"flew {len(run.rows) - done_before} missions in {seconds:.1f} s{_retried(run)}")
     print("wrote " + ", ".join(str(folder / name) for name in written))
     if args.compare:
         leaderboard(folder, run.finished, None)
     return 0
+
+
+def _retried(run: BatchRun) -> str:
+    """The end of the ``flew`` line: how many missions flew again because the worker
+    process flying them died, when any did."""
+    if not run.retried:
+        return ""
+    them = "it" if run.retried == 1 else "them"
+    return f"; {run.retried} flown again after the worker process flying {them} died"
 
 
 def _print_contenders(rows: list[dict], folder: Path) -> None:
