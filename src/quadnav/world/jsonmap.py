@@ -22,7 +22,11 @@ import math
 import warnings
 from typing import Any
 
+import numpy as np
+
 from quadnav.errors import MapError
+from quadnav.world.blockrows import BlockRows
+from quadnav.world.jsonblocks import BlockTable
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
 from quadnav.world.reading import (
     assemble_world,
@@ -73,10 +77,11 @@ def _read_number(text: str) -> float:
     return literal
 
 
-def _decode_with_lines(text: str) -> Any:
-    """json.loads, but every object is a _LocatedDict carrying its 1-based line, a key
-    given twice in one object is refused (JSON leaves it open; Python keeps the last), and
-    so is a number in other than ASCII digits."""
+def _decode_with_lines(text: str, table: BlockTable) -> Any:
+    """json.loads, but every object is a _LocatedDict carrying its 1-based line (or, shaped
+    as a block, a row of ``table`` with its line), a key given twice in one object is
+    refused (JSON leaves it open; Python keeps the last), and so is a number in other than
+    ASCII digits."""
     # Integers become floats as they are read: every number in a map is used as one, and
     # int() refuses more than 4,300 digits.
     decoder = json.JSONDecoder(parse_int=_read_number, parse_float=_read_number)
@@ -86,12 +91,15 @@ def _decode_with_lines(text: str) -> Any:
 
     def parse_object(s_and_end: tuple[str, int], strict: bool, scan_once: Any,
                      object_hook: Any, object_pairs_hook: Any, memo: Any = None
-                     ) -> tuple[dict, int]:
+                     ) -> tuple[dict | int, int]:
         start = s_and_end[1]
         cursor["line"] += text.count("\n", cursor["offset"], start)
         cursor["offset"] = start
         line = cursor["line"]
         pairs, end = json.decoder.JSONObject(s_and_end, strict, scan_once, None, list, memo)
+        row = table.compact(pairs, line)
+        if row is not None:
+            return row, end
         located = _LocatedDict(pairs)
         if len(located) < len(pairs):
             seen: set[str] = set()
@@ -150,32 +158,43 @@ def parse_json_map(text: str, source: str) -> World:
     A map is read first by Python's compiled JSON decoder, which knows no lines; a map
     that reads cleanly (no error, no warning) is done. Otherwise it is read again by the
     line-tracking decoder, whose errors and warnings name the line of each object."""
-    if not text.strip():
+    if not text or text.isspace():
         raise MapError(source, "empty map: expected a JSON object with \"bounds\"")
+    world = _parse_compiled(text, source)
+    return world if world is not None else _parse_with_lines(text, source)
+
+
+def _parse_compiled(text: str, source: str) -> World | None:
+    """:func:`parse_json_map` by Python's compiled decoder; ``None`` if the map has
+    anything to say (an error or a warning)."""
+    table = BlockTable()
+
+    def block_or_dict(pairs: list[tuple[str, Any]]) -> dict | int:
+        """An object of the compiled decoder: a row of ``table`` if shaped as a block,
+        else a dict; ValueError for a key given twice."""
+        row = table.compact(pairs, None)
+        if row is not None:
+            return row
+        data = dict(pairs)
+        if len(data) < len(pairs):
+            raise ValueError("a key given twice")
+        return data
+
     try:
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
-            world = _interpret(json.loads(text, object_pairs_hook=_unique_keys,
-                                          parse_int=float), source)
-        if not said:
-            return world
+            world = _interpret(json.loads(text, object_pairs_hook=block_or_dict,
+                                          parse_int=float), source, table)
     except (ValueError, RecursionError, MapError):  # JSONDecodeError is a ValueError
-        pass
-    return _parse_with_lines(text, source)
-
-
-def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
-    """An object of the compiled decoder; ValueError for a key given twice."""
-    data = dict(pairs)
-    if len(data) < len(pairs):
-        raise ValueError("a key given twice")
-    return data
+        return None
+    return None if said else world
 
 
 def _parse_with_lines(text: str, source: str) -> World:
     """:func:`parse_json_map` by the line-tracking decoder."""
+    table = BlockTable()
     try:
-        data = _decode_with_lines(text)
+        data = _decode_with_lines(text, table)
     except json.JSONDecodeError as error:
         raise MapError(source, f"broken JSON: {error.msg} (column {error.colno})",
                        error.lineno) from None
@@ -183,40 +202,61 @@ def _parse_with_lines(text: str, source: str) -> World:
         raise MapError(source, str(refused), refused.line) from None
     except RecursionError:
         raise MapError(source, "broken JSON: nested too deeply") from None
-    return _interpret(data, source)
+    return _interpret(data, source, table, _LocatedDict)
 
 
-def _interpret(data: Any, source: str) -> World:
-    """The World of a decoded JSON map (objects carry their line, or none)."""
+def _interpret(data: Any, source: str, table: BlockTable, make_dict: type[dict] = dict
+               ) -> World:
+    """The World of a decoded JSON map (objects carry their line, or none; those shaped as
+    blocks are rows of ``table``, given back as ``make_dict`` where a dict is needed)."""
+    data = table.restore(data, make_dict) if type(data) is int else data
     if not isinstance(data, dict):
         raise MapError(source, "expected a JSON object at the top level", 1)
     if "bounds" not in data:
         raise MapError(source, 'missing key "bounds": expected {"bounds": {"extents": '
                        "[xmin, xmax, ymin, ymax, zmin, zmax]}}", _line(data))
-    boundary = _box(data["bounds"], source, "bounds", boundary=True)
+    boundary = _box(table.restore(data["bounds"], make_dict), source, "bounds", boundary=True)
     raw_blocks = data.get("blocks", [])
     if not isinstance(raw_blocks, list):
         raise MapError(source, '"blocks": expected a list of objects', _line(data))
     check_block_count(len(raw_blocks), source, _line(data))
-    blocks, colors, lines = [], [], []
-    for i, obj in enumerate(raw_blocks):
+    blocks = BlockRows()
+    for i in range(_add_plain_blocks(raw_blocks, table, blocks, source), len(raw_blocks)):
+        obj = table.restore(raw_blocks[i], make_dict)
         box = _box(obj, source, f"blocks[{i}]")
         rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
                        f"blocks[{i}].color")
         color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color")
         if box is not None:
-            blocks.append(box)
-            colors.append(color)
-            lines.append(_line(obj))
+            blocks.add(box, color, _line(obj))
     extras: dict[str, Any] = {}
     for key in ("start", "goal"):
         if key in data:
-            point = _numbers(data[key], 3, source, _line(data), key)
+            point = _numbers(table.restore(data[key], make_dict), 3, source, _line(data), key)
             extras[key] = check_coordinates(point, source, _line(data), key)
     if "margin" in data:
-        extras["margin"] = check_margin(_number(data["margin"], source, _line(data), "margin"),
-                                        source, _line(data))
-    return assemble_world(source, boundary, blocks, colors, lines, **extras)
+        margin = _number(table.restore(data["margin"], make_dict), source, _line(data),
+                         "margin")
+        extras["margin"] = check_margin(margin, source, _line(data))
+    return assemble_world(source, boundary, *blocks.arrays(), **extras)
+
+
+def _add_plain_blocks(raw_blocks: list[Any], table: BlockTable, blocks: BlockRows,
+                      source: str) -> int:
+    """Add to ``blocks`` the leading entries of ``raw_blocks`` that are rows of ``table``
+    with finite numbers and colours in 0..1, all at once; the number added. The entry after
+    them (if any) is read one at a time, and says what is wrong with it or is fine."""
+    count = next((i for i, obj in enumerate(raw_blocks) if type(obj) is not int),
+                 len(raw_blocks))
+    extents, colors, colored, lines = table.rows(np.array(raw_blocks[:count], dtype=np.int64))
+    colors[~colored] = DEFAULT_BLOCK_COLOR
+    fine = np.all(np.isfinite(extents), axis=1) & np.all(
+        np.isfinite(colors) & (colors >= 0) & (colors <= 1), axis=1)
+    if not fine.all():
+        count = int(np.argmin(fine))
+    blocks.add_ordered(extents[:count, [0, 2, 4, 1, 3, 5]], colors[:count], lines[:count],
+                       source, lambda row: f"blocks[{row}]")
+    return count
 
 
 def _json_list(values: Any) -> str:
