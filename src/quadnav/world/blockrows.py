@@ -38,29 +38,12 @@ class BlockRows:
         self._colors.extend(color)
         self._lines.append(NO_LINE if line is None else line)
 
-    def add_ordered(self, boxes: FloatArray, colors: FloatArray, lines: np.ndarray,
-                    source: str, what: Callable[[int], str]) -> None:
-        """Blocks ``boxes`` (k, 6) given as mins then maxes, ``colors`` (k, 3) in 0..1,
-        ``lines`` (k,) int. A row whose min is not below its max on some axis goes through
-        :func:`~quadnav.world.reading.order_extents` (called for those rows alone, in
-        order, with ``what(row)`` naming it): read as the box between, or dropped, with
-        its warning."""
-        odd = np.flatnonzero(np.any(boxes[:, :3] >= boxes[:, 3:], axis=1))
-        if odd.size:
-            boxes = boxes.copy()
-            keep = np.ones(len(boxes), dtype=bool)
-            for row in odd.tolist():
-                line = int(lines[row])
-                ordered = order_extents(boxes[row].tolist(), source,
-                                        None if line == NO_LINE else line, what(row))
-                if ordered is None:
-                    keep[row] = False
-                else:
-                    boxes[row] = ordered[0] + ordered[1]
-            boxes, colors, lines = boxes[keep], colors[keep], lines[keep]
-        self._boxes.frombytes(np.ascontiguousarray(boxes, dtype=np.float64).tobytes())
-        self._colors.frombytes(np.ascontiguousarray(colors, dtype=np.float64).tobytes())
-        self._lines.frombytes(np.ascontiguousarray(lines, dtype=np.int64).tobytes())
+    def extend(self, boxes: FloatArray, colors: FloatArray, lines: np.ndarray) -> None:
+        """Blocks ``boxes`` (k, 6) as mins then maxes, ``colors`` (k, 3) in 0..1, ``lines``
+        (k,) int."""
+        self._boxes.frombytes(_bytes_of(boxes, np.float64))
+        self._colors.frombytes(_bytes_of(colors, np.float64))
+        self._lines.frombytes(_bytes_of(lines, np.int64))
 
     def arrays(self) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """``boxes`` (n, 6), ``colors`` (n, 3) and ``lines`` (n,) int64, viewing the rows'
@@ -68,3 +51,31 @@ class BlockRows:
         return (np.frombuffer(self._boxes, dtype=np.float64).reshape(-1, 6),
                 np.frombuffer(self._colors, dtype=np.float64).reshape(-1, 3),
                 np.frombuffer(self._lines, dtype=np.int64))
+
+
+def _bytes_of(values: np.ndarray, dtype: type) -> memoryview:
+    """The bytes of ``values`` as ``dtype`` in C order (no copy when they are so already)."""
+    return memoryview(np.ascontiguousarray(values, dtype=dtype).reshape(-1)).cast("B")
+
+
+def order_rows(boxes: FloatArray, colors: FloatArray, lines: np.ndarray, source: str,
+               what: Callable[[int], str]) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """Blocks ``boxes`` (k, 6) given as mins then maxes, ``colors`` (k, 3), ``lines`` (k,)
+    (:data:`NO_LINE`: none), with every row whose min is not below its max on some axis
+    put through :func:`~quadnav.world.reading.order_extents` (called for those rows alone,
+    in order, with ``what(row)`` naming it): read as the box between, or dropped, with its
+    warning. The arrays given are returned when no row is such."""
+    odd = np.flatnonzero(np.any(boxes[:, :3] >= boxes[:, 3:], axis=1))
+    if odd.size == 0:
+        return boxes, colors, lines
+    boxes = boxes.copy()
+    keep = np.ones(len(boxes), dtype=bool)
+    for row in odd.tolist():
+        line = int(lines[row])
+        ordered = order_extents(boxes[row].tolist(), source,
+                                None if line == NO_LINE else line, what(row))
+        if ordered is None:
+            keep[row] = False
+        else:
+            boxes[row] = ordered[0] + ordered[1]
+    return boxes[keep], colors[keep], lines[keep]

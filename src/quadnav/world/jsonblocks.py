@@ -23,6 +23,8 @@ from quadnav.world.blockrows import NO_LINE
 _BLOCK_KEYS = ("extents",)
 _COLORED_BLOCK_KEYS = ("extents", "color")
 _NO_COLOR = [0.0, 0.0, 0.0]
+#: The columns of a block's interleaved extents in the order mins then maxes.
+_MINS_THEN_MAXES = np.array([0, 2, 4, 1, 3, 5])
 
 
 def _floats(value: Any, count: int) -> bool:
@@ -37,10 +39,7 @@ class BlockTable:
     (n, 3) (zeros where none is given), whether each gave one and the line each starts on."""
 
     def __init__(self) -> None:
-        self._extents = array("d")
-        self._colors = array("d")
-        self._colored = bytearray()
-        self._lines = array("q")
+        self.clear()
 
     def compact(self, pairs: list[tuple[str, Any]], line: int | None) -> int | None:
         """The row number of a block object given by its ``(key, value)`` pairs, added to
@@ -62,23 +61,33 @@ class BlockTable:
 
     def rows(self, numbers: np.ndarray
              ) -> tuple[FloatArray, FloatArray, np.ndarray, np.ndarray]:
-        """Extents (k, 6) interleaved, colours (k, 3), whether each gave a colour (k,)
-        and lines (k,) of the rows ``numbers`` (k,)."""
-        return (np.frombuffer(self._extents, dtype=np.float64).reshape(-1, 6)[numbers],
+        """Of the rows ``numbers`` (k,): boxes (k, 6) as mins then maxes (``xmin, ymin,
+        zmin, xmax, ymax, zmax``), colours (k, 3), whether each gave a colour (k,) and
+        lines (k,)."""
+        return (self._extents_view()[numbers[:, None], _MINS_THEN_MAXES],
                 np.frombuffer(self._colors, dtype=np.float64).reshape(-1, 3)[numbers],
                 np.frombuffer(self._colored, dtype=np.bool_)[numbers],
                 np.frombuffer(self._lines, dtype=np.int64)[numbers])
+
+    def clear(self) -> None:
+        """Forget every row (their memory is freed once no array viewing it is left)."""
+        self._extents = array("d")
+        self._colors = array("d")
+        self._colored = bytearray()
+        self._lines = array("q")
+
+    def _extents_view(self) -> FloatArray:
+        return np.frombuffer(self._extents, dtype=np.float64).reshape(-1, 6)
 
     def restore(self, value: Any, make_dict: type[dict] = dict) -> Any:
         """``value`` with every row number in it turned back into the object it stands for
         (a ``make_dict`` carrying its ``line`` when the table knows it)."""
         if type(value) is int:
-            extents, color, colored, line = self.rows(np.array([value]))
-            obj = make_dict(extents=extents[0].tolist())
-            if colored[0]:
-                obj["color"] = color[0].tolist()
-            if line[0] != NO_LINE:
-                obj.line = int(line[0])
+            obj = make_dict(extents=self._extents_view()[value].tolist())
+            if self._colored[value]:
+                obj["color"] = self._colors[3 * value:3 * value + 3].tolist()
+            if self._lines[value] != NO_LINE:
+                obj.line = self._lines[value]
             return obj
         if type(value) is list:
             return [self.restore(v, make_dict) for v in value]

@@ -24,8 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import MapError
-from quadnav.world.blockrows import BlockRows
+from quadnav.world.blockrows import BlockRows, order_rows
 from quadnav.world.jsonblocks import BlockTable
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
 from quadnav.world.reading import (
@@ -220,43 +221,48 @@ def _interpret(data: Any, source: str, table: BlockTable, make_dict: type[dict] 
     if not isinstance(raw_blocks, list):
         raise MapError(source, '"blocks": expected a list of objects', _line(data))
     check_block_count(len(raw_blocks), source, _line(data))
-    blocks = BlockRows()
-    for i in range(_add_plain_blocks(raw_blocks, table, blocks, source), len(raw_blocks)):
-        obj = table.restore(raw_blocks[i], make_dict)
-        box = _box(obj, source, f"blocks[{i}]")
-        rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
-                       f"blocks[{i}].color")
-        color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color")
-        if box is not None:
-            blocks.add(box, color, _line(obj))
-    extras: dict[str, Any] = {}
+    extras = {key: table.restore(data[key], make_dict) for key in ("start", "goal", "margin")
+              if key in data}
+    count, plain = _plain_blocks(raw_blocks, table, source)
+    if count < len(raw_blocks):
+        blocks = BlockRows()
+        blocks.extend(*plain)
+        for i in range(count, len(raw_blocks)):
+            obj = table.restore(raw_blocks[i], make_dict)
+            box = _box(obj, source, f"blocks[{i}]")
+            rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
+                           f"blocks[{i}].color")
+            color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color")
+            if box is not None:
+                blocks.add(box, color, _line(obj))
+        plain = blocks.arrays()
+    table.clear()
     for key in ("start", "goal"):
-        if key in data:
-            point = _numbers(table.restore(data[key], make_dict), 3, source, _line(data), key)
+        if key in extras:
+            point = _numbers(extras[key], 3, source, _line(data), key)
             extras[key] = check_coordinates(point, source, _line(data), key)
-    if "margin" in data:
-        margin = _number(table.restore(data["margin"], make_dict), source, _line(data),
-                         "margin")
-        extras["margin"] = check_margin(margin, source, _line(data))
-    return assemble_world(source, boundary, *blocks.arrays(), **extras)
+    if "margin" in extras:
+        extras["margin"] = check_margin(_number(extras["margin"], source, _line(data),
+                                                "margin"), source, _line(data))
+    return assemble_world(source, boundary, *plain, **extras)
 
 
-def _add_plain_blocks(raw_blocks: list[Any], table: BlockTable, blocks: BlockRows,
-                      source: str) -> int:
-    """Add to ``blocks`` the leading entries of ``raw_blocks`` that are rows of ``table``
-    with finite numbers and colours in 0..1, all at once; the number added. The entry after
-    them (if any) is read one at a time, and says what is wrong with it or is fine."""
+def _plain_blocks(raw_blocks: list[Any], table: BlockTable, source: str
+                  ) -> tuple[int, tuple[FloatArray, FloatArray, np.ndarray]]:
+    """The leading entries of ``raw_blocks`` that are rows of ``table`` with finite numbers
+    and colours in 0..1, read all at once: how many, and their boxes (mins then maxes),
+    colours and lines (see :func:`~quadnav.world.blockrows.order_rows`). The entry after
+    them (if any) is to be read one at a time, and says what is wrong with it or is fine."""
     count = next((i for i, obj in enumerate(raw_blocks) if type(obj) is not int),
                  len(raw_blocks))
-    extents, colors, colored, lines = table.rows(np.array(raw_blocks[:count], dtype=np.int64))
+    boxes, colors, colored, lines = table.rows(np.array(raw_blocks[:count], dtype=np.int64))
     colors[~colored] = DEFAULT_BLOCK_COLOR
-    fine = np.all(np.isfinite(extents), axis=1) & np.all(
+    fine = np.all(np.isfinite(boxes), axis=1) & np.all(
         np.isfinite(colors) & (colors >= 0) & (colors <= 1), axis=1)
     if not fine.all():
         count = int(np.argmin(fine))
-    blocks.add_ordered(extents[:count, [0, 2, 4, 1, 3, 5]], colors[:count], lines[:count],
-                       source, lambda row: f"blocks[{row}]")
-    return count
+        boxes, colors, lines = boxes[:count], colors[:count], lines[:count]
+    return count, order_rows(boxes, colors, lines, source, lambda row: f"blocks[{row}]")
 
 
 def _json_list(values: Any) -> str:

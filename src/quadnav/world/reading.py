@@ -275,20 +275,23 @@ def assemble_world(
     ``extras`` (start, goal, margin) pass through to the World.
     """
     bound = np.asarray(boundary, dtype=np.float64)
-    lower = np.maximum(blocks[:, :3], bound[:3])
-    upper = np.minimum(blocks[:, 3:], bound[3:])
-    outside = np.any(lower >= upper, axis=1)
-    clipped = np.concatenate([lower, upper], axis=1)
-    del lower, upper
-    moved = np.any(clipped != blocks, axis=1)
-    for row in np.flatnonzero(outside | moved).tolist():
-        where = _where(source, int(lines[row]) or None)
-        if outside[row]:
-            warnings.warn(f"{where}: block lies outside the boundary; dropped", MapWarning,
-                          stacklevel=2)
-        else:
-            warnings.warn(f"{where}: block extends past the boundary; clipped to it",
-                          MapWarning, stacklevel=2)
-    if outside.any():
-        clipped, colors = clipped[~outside], colors[~outside]
-    return World(boundary=bound, blocks=clipped, colors=colors, name=source, **extras)
+    past = np.flatnonzero(np.any(blocks[:, :3] < bound[:3], axis=1)
+                          | np.any(blocks[:, 3:] > bound[3:], axis=1))
+    if past.size:
+        lower = np.maximum(blocks[past, :3], bound[:3])
+        upper = np.minimum(blocks[past, 3:], bound[3:])
+        outside = np.any(lower >= upper, axis=1)
+        for row, dropped in zip(past.tolist(), outside.tolist(), strict=True):
+            where = _where(source, int(lines[row]) or None)
+            if dropped:
+                warnings.warn(f"{where}: block lies outside the boundary; dropped",
+                              MapWarning, stacklevel=2)
+            else:
+                warnings.warn(f"{where}: block extends past the boundary; clipped to it",
+                              MapWarning, stacklevel=2)
+        blocks = blocks.copy()
+        blocks[past] = np.concatenate([lower, upper], axis=1)
+        kept = np.ones(len(blocks), dtype=bool)
+        kept[past[outside]] = False
+        blocks, colors = blocks[kept], colors[kept]
+    return World(boundary=bound, blocks=blocks, colors=colors, name=source, **extras)

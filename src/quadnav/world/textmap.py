@@ -19,7 +19,7 @@ import numpy as np
 
 from quadnav.errors import MapError
 from quadnav.limits import MAX_BLOCKS
-from quadnav.world.blockrows import BlockRows
+from quadnav.world.blockrows import BlockRows, order_rows
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
 from quadnav.world.reading import (
     assemble_world,
@@ -81,8 +81,8 @@ class _TextMapReader:
         if not (len(self.blocks) + len(rows) <= MAX_BLOCKS and np.all(np.isfinite(rows))
                 and np.all((rows[:, 6:] >= 0) & (rows[:, 6:] <= 255))):
             return False
-        self.blocks.add_ordered(rows[:, :6], rows[:, 6:] / 255, lines, self.source,
-                                lambda _row: "block")
+        self.blocks.extend(*order_rows(rows[:, :6], rows[:, 6:] / 255, lines, self.source,
+                                       lambda _row: "block"))
         self.saw_content = self.saw_content or lines.size > 0
         return True
 
