@@ -33,12 +33,12 @@ from quadnav.world.reading import (
 from quadnav.world.textblocks import read_block_lines
 
 _FIELD_COUNTS = (6, 9)
-#: Characters of a map read at a time (about 17,000 block lines): what the numpy reading of
+#: Characters of a map read at a time (about 4,500 block lines): what the numpy reading of
 #: a piece holds besides the blocks.
-PIECE_CHARACTERS = 1 << 20
+PIECE_CHARACTERS = 1 << 18
 #: Characters of the smaller pieces a piece with something to say is read in again: those
 #: of them that still have something to say are read line by line.
-SMALL_PIECE_CHARACTERS = 1 << 15
+SMALL_PIECE_CHARACTERS = 1 << 13
 #: The colour of a block line that gives none, as a text map writes colours (0-255).
 _NO_COLOR = [c * 255 for c in DEFAULT_BLOCK_COLOR]
 
