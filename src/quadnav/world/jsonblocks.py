@@ -20,8 +20,7 @@ import numpy as np
 from quadnav.arrays import FloatArray
 from quadnav.world.blockrows import NO_LINE
 
-_BLOCK_KEYS = ("extents",)
-_COLORED_BLOCK_KEYS = ("extents", "color")
+_FLOAT = {float}
 _NO_COLOR = [0.0, 0.0, 0.0]
 #: The columns of a block's interleaved extents in the order mins then maxes.
 _MINS_THEN_MAXES = np.array([0, 2, 4, 1, 3, 5])
@@ -30,8 +29,7 @@ _MINS_THEN_MAXES = np.array([0, 2, 4, 1, 3, 5])
 def _floats(value: Any, count: int) -> bool:
     """Whether ``value`` is a list of ``count`` plain floats (not a subclass keeping the
     digits of a number too large for one)."""
-    return (type(value) is list and len(value) == count
-            and all(type(v) is float for v in value))
+    return type(value) is list and len(value) == count and set(map(type, value)) == _FLOAT
 
 
 class BlockTable:
@@ -44,10 +42,11 @@ class BlockTable:
     def compact(self, pairs: list[tuple[str, Any]], line: int | None) -> int | None:
         """The row number of a block object given by its ``(key, value)`` pairs, added to
         the table; ``None`` for an object of another shape (kept as a dict)."""
-        keys = tuple(key for key, _ in pairs)
-        if keys == _BLOCK_KEYS:
+        if not pairs or pairs[0][0] != "extents":
+            return None
+        if len(pairs) == 1:
             color = _NO_COLOR
-        elif keys == _COLORED_BLOCK_KEYS and _floats(pairs[1][1], 3):
+        elif len(pairs) == 2 and pairs[1][0] == "color" and _floats(pairs[1][1], 3):
             color = pairs[1][1]
         else:
             return None
