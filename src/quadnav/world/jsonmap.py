@@ -223,18 +223,20 @@ def _interpret(data: Any, source: str, table: BlockTable, make_dict: type[dict] 
     check_block_count(len(raw_blocks), source, _line(data))
     extras = {key: table.restore(data[key], make_dict) for key in ("start", "goal", "margin")
               if key in data}
-    count, plain = _plain_blocks(raw_blocks, table, source)
-    if count < len(raw_blocks):
+    done, plain = _plain_blocks(raw_blocks, 0, table, source)
+    if done < len(raw_blocks):
         blocks = BlockRows()
         blocks.extend(*plain)
-        for i in range(count, len(raw_blocks)):
-            obj = table.restore(raw_blocks[i], make_dict)
-            box = _box(obj, source, f"blocks[{i}]")
+        while done < len(raw_blocks):
+            obj = table.restore(raw_blocks[done], make_dict)
+            box = _box(obj, source, f"blocks[{done}]")
             rgb = _numbers(obj.get("color", list(DEFAULT_BLOCK_COLOR)), 3, source, _line(obj),
-                           f"blocks[{i}].color")
-            color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{i}].color")
+                           f"blocks[{done}].color")
+            color = check_color(rgb, 1.0, source, _line(obj), f"blocks[{done}].color")
             if box is not None:
                 blocks.add(box, color, _line(obj))
+            done, plain = _plain_blocks(raw_blocks, done + 1, table, source)
+            blocks.extend(*plain)
         plain = blocks.arrays()
     table.clear()
     for key in ("start", "goal"):
@@ -247,22 +249,25 @@ def _interpret(data: Any, source: str, table: BlockTable, make_dict: type[dict] 
     return assemble_world(source, boundary, *plain, **extras)
 
 
-def _plain_blocks(raw_blocks: list[Any], table: BlockTable, source: str
+def _plain_blocks(raw_blocks: list[Any], start: int, table: BlockTable, source: str
                   ) -> tuple[int, tuple[FloatArray, FloatArray, np.ndarray]]:
-    """The leading entries of ``raw_blocks`` that are rows of ``table`` with finite numbers
-    and colours in 0..1, read all at once: how many, and their boxes (mins then maxes),
-    colours and lines (see :func:`~quadnav.world.blockrows.order_rows`). The entry after
-    them (if any) is to be read one at a time, and says what is wrong with it or is fine."""
-    count = next((i for i, obj in enumerate(raw_blocks) if type(obj) is not int),
-                 len(raw_blocks))
-    boxes, colors, colored, lines = table.rows(np.array(raw_blocks[:count], dtype=np.int64))
+    """The entries of ``raw_blocks`` from ``start`` on that are rows of ``table`` with
+    finite numbers and colours in 0..1, read all at once: the index of the first entry after
+    them, and their boxes (mins then maxes), colours and lines (see
+    :func:`~quadnav.world.blockrows.order_rows`). That entry (if any) is to be read on its
+    own: it says what is wrong with it, or is fine in a way that is not a row's."""
+    end = next((i for i in range(start, len(raw_blocks)) if type(raw_blocks[i]) is not int),
+               len(raw_blocks))
+    boxes, colors, colored, lines = table.rows(np.array(raw_blocks[start:end],
+                                                        dtype=np.int64))
     colors[~colored] = DEFAULT_BLOCK_COLOR
     fine = np.all(np.isfinite(boxes), axis=1) & np.all(
         np.isfinite(colors) & (colors >= 0) & (colors <= 1), axis=1)
     if not fine.all():
         count = int(np.argmin(fine))
         boxes, colors, lines = boxes[:count], colors[:count], lines[:count]
-    return count, order_rows(boxes, colors, lines, source, lambda row: f"blocks[{row}]")
+        end = start + count
+    return end, order_rows(boxes, colors, lines, source, lambda row: f"blocks[{start + row}]")
 
 
 def _json_list(values: Any) -> str:

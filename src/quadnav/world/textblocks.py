@@ -3,10 +3,10 @@
 :func:`read_block_lines` takes a piece of whole lines and gives its blocks' numbers when every
 line is blank or a ``block`` line whose 6 or 9 fields are numbers as a map writes them (see
 :func:`~quadnav.world.reading.is_number_text`), separated by spaces or tabs, with ``\\n`` or
-``\\r\\n`` line ends; otherwise ``None``, and the piece is read line by line by the checker of
-:mod:`quadnav.world.textmap`, which says what is wrong. Numbers are converted by numpy's
-parser, which rounds as Python's ``float`` does; that they are finite and in range is left to
-the caller.
+``\\r\\n`` line ends and ASCII ``#`` comments; otherwise ``None``, and the piece is read line
+by line by the checker of :mod:`quadnav.world.textmap`, which says what is wrong. Numbers are
+converted by numpy's parser, which rounds as Python's ``float`` does; that they are finite and
+in range is left to the caller.
 """
 
 from __future__ import annotations
@@ -58,19 +58,20 @@ def read_block_lines(piece: str, first_line: int, no_color: Sequence[float]
     """The numbers of the ``block`` lines of ``piece`` (whole lines of a text map, the
     first numbered ``first_line``) as rows (k, 9) ``xmin ymin zmin xmax ymax zmax r g b``
     (``no_color`` where a line gives none), and the line of each row (k,); ``None`` when a
-    line is anything else (a comment, a boundary line, a lone ``\\r``, a word that is not a
-    number, a line longer than :data:`~quadnav.limits.MAX_LINE`, ...)."""
+    line is anything else (a boundary line, a lone ``\\r``, a word that is not a number, a line
+    longer than :data:`~quadnav.limits.MAX_LINE`, ...). ``#`` comments are read as spaces."""
     if not piece.isascii():
         return None
     text = np.frombuffer(bytearray(piece, "ascii"), dtype=np.uint8)
-    kinds = _CLASS[text]
-    if np.any(kinds == _OTHER):
-        return None
     returns = np.flatnonzero(text == ord("\r"))
     if returns.size and (returns[-1] + 1 == text.size or np.any(text[returns + 1] != 10)):
         return None
     ends = np.flatnonzero(text == ord("\n"))
     if np.diff(ends, prepend=-1, append=text.size).max(initial=0) > MAX_LINE:
+        return None
+    _blank_comments(text, ends)
+    kinds = _CLASS[text]
+    if np.any(kinds == _OTHER):
         return None
     words, word_ends = _words(kinds)
     line_of = np.searchsorted(ends, words)
@@ -93,6 +94,19 @@ def read_block_lines(piece: str, first_line: int, no_color: Sequence[float]
     if values.size != fields.sum():
         return None
     return _rows(values, fields, no_color), first_line + line_of[first]
+
+
+def _blank_comments(text: np.ndarray, ends: np.ndarray) -> None:
+    """Turn every ``#`` comment of ``text`` (from a ``#`` to the end of its line, whose
+    ``\n`` are at ``ends``) into spaces, in place."""
+    hashes = np.flatnonzero(text == ord("#"))
+    if hashes.size == 0:
+        return
+    stops = np.append(ends, text.size)[np.searchsorted(ends, hashes)]
+    depth = np.zeros(text.size + 1, dtype=np.int32)
+    np.add.at(depth, hashes, 1)
+    np.add.at(depth, stops, -1)
+    text[np.cumsum(depth[:-1]) > 0] = ord(" ")
 
 
 def _words(kinds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
