@@ -23,7 +23,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from quadnav.errors import MapError
-from quadnav.world import parse_map, textmap
+from quadnav.world import jsonmap, parse_map, textmap
 from quadnav.world.jsonblocks import BlockTable
 from quadnav.world.reading import is_number_text
 from quadnav.world.textblocks import read_block_lines
@@ -109,7 +109,7 @@ def quirky_json_map(seed: int) -> str:
     """A JSON map of up to a few hundred blocks with a random set of quirks."""
     rng = random.Random(seed)
     quirks = {q for q in ["swap", "flat", "nocolor", "badcolor", "nan", "extra", "order",
-                          "other", "outside", "start", "bool", "nested", "huge", "dup"]
+                          "other", "outside", "start", "bool", "nested", "huge", "dup", "strings"]
               if rng.random() < 0.12}
     blocks: list = []
     for _ in range(rng.choice([0, 3, 40, 300])):
@@ -144,6 +144,9 @@ def quirky_json_map(seed: int) -> str:
     if "start" in quirks:
         data["start"] = rng.choice([[1, 1, 1], {"extents": [1, 2, 3, 4, 5, 6]}, [1e5, 0, 0]])
         data["margin"] = rng.choice([0.3, -1, {"extents": [1, 2, 3, 4, 5, 6]}])
+    if "strings" in quirks:  # braces and quotes in strings, objects within objects
+        data["note {"] = 'a { b " } \\ {\n'
+        data["other"] = {"x": {"extents": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]}, "y": "}"}
     text = json.dumps(data, indent=rng.choice([None, 1, 4]))
     if "huge" in quirks:
         text = text.replace('"extents": [', '"extents": [' + "9" * 400 + ", ", 1)
@@ -170,9 +173,11 @@ def _outcome(data: bytes, name: str) -> tuple:
 
 
 def _checker_alone(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Read every text line and every JSON object by the checker, one at a time."""
+    """Read every text line and every JSON object by the checker, one at a time (JSON by
+    the line-tracking decoder alone)."""
     monkeypatch.setattr(textmap, "read_block_lines", lambda *args: None)
     monkeypatch.setattr(BlockTable, "compact", lambda self, pairs, line: None)
+    monkeypatch.setattr(jsonmap, "_parse_compiled", lambda *args: None)
 
 
 def _corpus_maps(shared_maps: Path | None) -> list[tuple[str, bytes]]:

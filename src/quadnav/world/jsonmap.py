@@ -19,13 +19,15 @@ import json
 import json.decoder
 import json.scanner
 import math
+import re
 import warnings
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
 from quadnav.arrays import FloatArray
-from quadnav.errors import MapError
+from quadnav.errors import MapError, MapWarning
 from quadnav.world.blockrows import BlockRows, order_rows
 from quadnav.world.jsonblocks import BlockTable
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
@@ -157,38 +159,76 @@ def parse_json_map(text: str, source: str) -> World:
     """Parse the text of a JSON map; raises MapError naming ``source`` and the line.
 
     A map is read first by Python's compiled JSON decoder, which knows no lines; a map
-    that reads cleanly (no error, no warning) is done. Otherwise it is read again by the
-    line-tracking decoder, whose errors and warnings name the line of each object."""
+    that reads cleanly (no error, no warning) is done. One with a warning is read again by
+    it, each object given the line of its ``{`` (found by :func:`_object_lines`); one with
+    an error is read again by the line-tracking decoder, which names the line of each
+    object and the digits of a number beyond a float's range."""
     if not text or text.isspace():
         raise MapError(source, "empty map: expected a JSON object with \"bounds\"")
-    world = _parse_compiled(text, source)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", MapWarning)
+            world = _parse_compiled(text, source)
+    except MapWarning:
+        world = _parse_compiled(text, source, iter(_object_lines(text)))
+        if world is None:
+            # An error after the warnings (one the compiled decoder cannot name, such as a
+            # number beyond a float's range): the warnings before it are said already.
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", MapWarning)
+                return _parse_with_lines(text, source)
     return world if world is not None else _parse_with_lines(text, source)
 
 
-def _parse_compiled(text: str, source: str) -> World | None:
-    """:func:`parse_json_map` by Python's compiled decoder; ``None`` if the map has
-    anything to say (an error or a warning)."""
+#: A JSON string (skipped) or a brace (group 1).
+_STRING_OR_BRACE = re.compile(r'"(?:[^"\\]|\\.)*"|([{}])')
+
+
+def _object_lines(text: str) -> list[int]:
+    """The 1-based line of each object's ``{`` in a JSON text (one that decodes), in the
+    order the decoder finishes the objects (an object after those inside it)."""
+    stack: list[int] = []
+    starts: list[int] = []
+    for match in _STRING_OR_BRACE.finditer(text):
+        if match.group(1) == "{":
+            stack.append(match.start())
+        elif match.group(1) == "}":
+            starts.append(stack.pop())
+    lines = [0] * len(starts)
+    line, offset = 1, 0
+    for i in sorted(range(len(starts)), key=starts.__getitem__):
+        line += text.count("\n", offset, starts[i])
+        offset = starts[i]
+        lines[i] = line
+    return lines
+
+
+def _parse_compiled(text: str, source: str, lines: Iterator[int] | None = None
+                    ) -> World | None:
+    """:func:`parse_json_map` by Python's compiled decoder, each object given the next of
+    ``lines`` (in the order the decoder finishes them; ``None``: no lines); ``None`` if the
+    map has an error."""
     table = BlockTable()
 
     def block_or_dict(pairs: list[tuple[str, Any]]) -> dict | int:
         """An object of the compiled decoder: a row of ``table`` if shaped as a block,
         else a dict; ValueError for a key given twice."""
-        row = table.compact(pairs, None)
+        line = None if lines is None else next(lines)
+        row = table.compact(pairs, line)
         if row is not None:
             return row
-        data = dict(pairs)
+        data = _LocatedDict(pairs)
         if len(data) < len(pairs):
             raise ValueError("a key given twice")
+        if line is not None:
+            data.line = line
         return data
 
     try:
-        with warnings.catch_warnings(record=True) as said:
-            warnings.simplefilter("always")
-            world = _interpret(json.loads(text, object_pairs_hook=block_or_dict,
-                                          parse_int=float), source, table)
+        data = json.loads(text, object_pairs_hook=block_or_dict, parse_int=float)
+        return _interpret(data, source, table, dict if lines is None else _LocatedDict)
     except (ValueError, RecursionError, MapError):  # JSONDecodeError is a ValueError
         return None
-    return None if said else world
 
 
 def _parse_with_lines(text: str, source: str) -> World:
