@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from quadnav.arrays import FloatArray
 from quadnav.errors import MapError, MapWarning
 from quadnav.inputfiles import not_a_file, special_file
 from quadnav.limits import (
@@ -82,11 +83,35 @@ def text_lines(text: str) -> list[str]:
     return _LINE_END.split(text)
 
 
-def keyword_lines(text: str, source: str, keywords: tuple[str, ...]
+def iter_text_lines(text: str) -> Iterator[str]:
+    """The lines of :func:`text_lines` one at a time (no list of them all)."""
+    start = 0
+    for end in _LINE_END.finditer(text):
+        yield text[start:end.start()]
+        start = end.end()
+    yield text[start:]
+
+
+def text_pieces(text: str, size: int) -> Iterator[tuple[str, int]]:
+    """``text`` in pieces of whole lines, each about ``size`` characters (more when a line
+    is longer), with the 1-based number of each piece's first line; a piece ends just
+    after a line end (``\r\n`` kept whole), the last one at the end of the text."""
+    start, first_line = 0, 1
+    while start < len(text):
+        end = _LINE_END.search(text, start + size) if start + size < len(text) else None
+        stop = len(text) if end is None else end.end()
+        piece = text[start:stop]
+        yield piece, first_line
+        first_line += piece.count("\n") + piece.count("\r") - piece.count("\r\n")
+        start = stop
+
+
+def keyword_lines(text: str, source: str, keywords: tuple[str, ...], first_line: int = 1
                   ) -> Iterator[tuple[int, str, list[str]]]:
     """``(line number, keyword, value fields)`` for each line of a keyword map text that
-    holds anything once ``#`` comments are removed; MapError for an unknown keyword."""
-    for number, raw in enumerate(text_lines(text), start=1):
+    holds anything once ``#`` comments are removed; MapError for an unknown keyword.
+    ``first_line``: the number of the text's first line (when it is a piece of a file)."""
+    for number, raw in enumerate(iter_text_lines(text), start=first_line):
         check_line_length(raw, source, number)
         fields = raw.split("#", 1)[0].split()
         if not fields:
@@ -236,37 +261,37 @@ def check_color(color: Sequence[float], scale: float, source: str, line: int | N
 def assemble_world(
     source: str,
     boundary: Sequence[float],
-    blocks: Sequence[Sequence[float]],
-    colors: Sequence[Sequence[float]],
-    lines: Sequence[int | None],
+    blocks: FloatArray,
+    colors: FloatArray,
+    lines: np.ndarray,
     **extras: object,
 ) -> World:
     """A World from checked parts, clipping blocks to the boundary.
 
-    A block partly outside the boundary is clipped to it; one wholly outside (or only
-    touching it) is dropped. Each repair is reported as a :class:`MapWarning` naming
-    the line. ``extras`` (start, goal, margin) pass through to the World.
+    ``blocks`` (N, 6) as mins then maxes, ``colors`` (N, 3) in 0..1, ``lines`` (N,) the
+    1-based line of each block (0: none known). A block partly outside the boundary is
+    clipped to it; one wholly outside (or only touching it) is dropped. Each repair is
+    reported as a :class:`MapWarning` naming the line, in the order of the blocks.
+    ``extras`` (start, goal, margin) pass through to the World.
     """
     bound = np.asarray(boundary, dtype=np.float64)
-    kept_blocks, kept_colors = [], []
-    for box, color, line in zip(blocks, colors, lines, strict=True):
-        where = source if line is None else f"{source}:{line}"
-        lower = np.maximum(box[:3], bound[:3])
-        upper = np.minimum(box[3:], bound[3:])
-        if np.any(lower >= upper):
-            warnings.warn(f"{where}: block lies outside the boundary; dropped", MapWarning,
-                          stacklevel=2)
-            continue
-        clipped = np.concatenate([lower, upper])
-        if not np.array_equal(clipped, box):
-            warnings.warn(f"{where}: block extends past the boundary; clipped to it",
-                          MapWarning, stacklevel=2)
-        kept_blocks.append(clipped)
-        kept_colors.append(color)
-    return World(
-        boundary=bound,
-        blocks=np.reshape(kept_blocks, (-1, 6)),
-        colors=np.reshape(kept_colors, (-1, 3)),
-        name=source,
-        **extras,
-    )
+    past = np.flatnonzero(np.any(blocks[:, :3] < bound[:3], axis=1)
+                          | np.any(blocks[:, 3:] > bound[3:], axis=1))
+    if past.size:
+        lower = np.maximum(blocks[past, :3], bound[:3])
+        upper = np.minimum(blocks[past, 3:], bound[3:])
+        outside = np.any(lower >= upper, axis=1)
+        for row, dropped in zip(past.tolist(), outside.tolist(), strict=True):
+            where = _where(source, int(lines[row]) or None)
+            if dropped:
+                warnings.warn(f"{where}: block lies outside the boundary; dropped",
+                              MapWarning, stacklevel=2)
+            else:
+                warnings.warn(f"{where}: block extends past the boundary; clipped to it",
+                              MapWarning, stacklevel=2)
+        blocks = blocks.copy()
+        blocks[past] = np.concatenate([lower, upper], axis=1)
+        kept = np.ones(len(blocks), dtype=bool)
+        kept[past[outside]] = False
+        blocks, colors = blocks[kept], colors[kept]
+    return World(boundary=bound, blocks=blocks, colors=colors, name=source, **extras)
