@@ -4,11 +4,13 @@ flying the same missions, in missions per CPU-second.
 Run: ``python bench/batch.py [--missions 20] [--repeats 3] [--workers 2] [--improve N]``,
 or ``--quick`` for a smoke run (4 missions, one repeat).
 
-``--shared-plans`` runs instead the issue's case (a): 20 planner seeds x 10 simulation seeds
-(``seeds = {plan = 20, sim = 10}``) with gusts of 0.02 N on the course map rbe595/map1 (from
-``../shared/maps``, with the course's start and goal) at 2 m/s and 3 m/s^2, 200 missions whose
-plans and trajectories are each made once, and prints per repeat the CPU seconds per
-mission, the wall time, the success rate and the plans made.
+``--cases`` runs instead issue 29's cases on the course map rbe595/map1 (from
+``../shared/maps``, with the course's start and goal), with gusts of 0.02 N at 2 m/s and
+3 m/s^2: (a) 20 planner seeds x 10 simulation seeds (``seeds = {plan = 20, sim = 10}``), 200
+missions whose plans and trajectories are each made once, and (b) 200 planner seeds, each
+mission its own plan. It prints per case the median CPU seconds per mission, the medians of
+the rows' stage times (planning, trajectory, flight), the successes, the plans made, and the
+minutes 10,000 such missions would take on the workers' cores.
 
 The missions: the built-in worlds ``forest`` and ``window`` alternately, each with its own
 start and goal, seeds 0, 1, 2, ... (half the missions each), at 2 m/s with 3 m/s^2 and
@@ -107,12 +109,14 @@ def fly_script(jobs: list[tuple[str, int]], folder: Path, improve: int) -> str:
 
 
 def same_results(batch_folder: Path, fly_folder: Path, count: int) -> bool:
-    """Whether each ``fly`` run's metrics equal its batch row (wall times aside)."""
+    """Whether each ``fly`` run's metrics equal its batch row where both have the key
+    (wall times aside)."""
     rows = read_rows(batch_folder / RESULTS_CSV)
     for k, row in enumerate(rows[:count]):
         metrics = json.loads((fly_folder / str(k) / "metrics.json").read_text())
         for key, value in metrics.items():
-            if key not in ("map", "start", "goal", *WALL_TIME_COLUMNS) and row[key] != value:
+            if (key in row and key not in ("map", "start", "goal", *WALL_TIME_COLUMNS)
+                    and row[key] != value):
                 return False
     return True
 
@@ -134,40 +138,75 @@ def study_arguments(description: str, parser: argparse.ArgumentParser | None = N
     return args, count - count % len(MAPS), args.repeats or (1 if args.quick else 3)
 
 
-def shared_plans(workers: int, improve: int, repeats: int) -> None:
-    """Case (a): 200 missions sharing 20 plans (see the module docstring), timed."""
-    spec_text = (f"seeds = {{plan = {PLAN_SEEDS}, sim = {SIM_SEEDS}}}\nspeeds = [{SPEED}]\n"
-                 f"gusts = [{GUSTS}]\naccel = {ACCELERATION}\ntime_cap = {TIME_CAP}\n"
-                 f"improve = {improve}\nmaps = [{{map = {json.dumps(str(SHARED_MAP))}, "
-                 f"start = {SHARED_QUERY['start']}, goal = {SHARED_QUERY['goal']}}}]\n")
-    count = PLAN_SEEDS * SIM_SEEDS
-    lines = []
+#: Case (b): every mission its own plan.
+OWN_PLANS = 200
+#: The study the cases are projected to, missions.
+PROJECTED = 10_000
+#: Columns of a row timed per stage (wall seconds inside a worker: one numba thread, so
+#: about its CPU seconds).
+STAGES = ("planning_time_s", "trajectory_time_s", "sim_wall_time_s")
+
+
+def case_spec(seeds: str, improve: int) -> str:
+    """A batch spec of the cases on the course map, its start and goal, ``seeds`` as
+    written in the spec."""
+    return (f"seeds = {seeds}\nspeeds = [{SPEED}]\ngusts = [{GUSTS}]\n"
+            f"accel = {ACCELERATION}\ntime_cap = {TIME_CAP}\nimprove = {improve}\n"
+            f"maps = [{{map = {json.dumps(str(SHARED_MAP))}, start = {SHARED_QUERY['start']}, "
+            f"goal = {SHARED_QUERY['goal']}}}]\n")
+
+
+def run_case(name: str, seeds: str, count: int, workers: int, improve: int, repeats: int,
+             scratch: Path) -> list[str]:
+    """One case flown ``repeats`` times by ``quadnav batch``: its line of the table (median
+    CPU seconds per mission, the stages' medians from the rows, successes, plans made and
+    the projection to :data:`PROJECTED` missions on ``workers`` cores)."""
+    spec = scratch / f"{name}.toml"
+    spec.write_text(case_spec(seeds, improve))
+    runs, stages, outcomes = [], {stage: [] for stage in STAGES}, set()
+    for k in range(repeats):
+        out = scratch / f"{name}-{k}"
+        runs.append(timed([QUADNAV, "batch", str(spec), "--workers", str(workers), "--quiet",
+                           "-o", str(out)]))
+        rows = read_rows(out / RESULTS_CSV)
+        for stage in STAGES:
+            stages[stage] += [row[stage] for row in rows if row[stage] is not None]
+        outcomes.add((sum(bool(row["success"]) for row in rows), len(rows),
+                      len(list((out / PLANS).iterdir()))))
+    per_mission = statistics.median(run.cpu for run in runs) / count
+    minutes = per_mission * PROJECTED / workers / 60
+    successes, flown, plans = sorted(outcomes)[0]
+    return [name, f"{per_mission:.3f}",
+            *(f"{1000 * statistics.median(stages[stage]):.1f}" for stage in STAGES),
+            f"{successes} of {flown}" + ("" if len(outcomes) == 1 else " (varied)"),
+            str(plans), f"{minutes:.1f}"]
+
+
+def cases(workers: int, improve: int, repeats: int) -> None:
+    """Cases (a) and (b) of issue 29 (see the module docstring), timed."""
     with tempfile.TemporaryDirectory() as scratch:
-        spec = Path(scratch) / "spec.toml"
-        spec.write_text(spec_text)
-        for k in range(repeats):
-            out = Path(scratch) / f"batch-{k}"
-            run = timed([QUADNAV, "batch", str(spec), "--workers", str(workers), "--quiet",
-                         "-o", str(out)])
-            rows = read_rows(out / RESULTS_CSV)
-            successes = sum(bool(row["success"]) for row in rows)
-            plans = len(list((out / PLANS).iterdir()))
-            lines.append([str(k + 1), f"{run.cpu:.1f}", f"{run.cpu / count:.3f}",
-                          f"{run.wall:.1f}", f"{successes} of {len(rows)}", str(plans)])
-    print(f"{count} missions: {SHARED_MAP.name}, {PLAN_SEEDS} planner seeds x {SIM_SEEDS} "
-          f"simulation seeds, gusts {GUSTS:g} N, {SPEED:g} m/s, {ACCELERATION:g} m/s^2, "
-          f"{improve:,} samples of improvement, quadnav batch --workers {workers}\n")
-    print(table(["repeat", "CPU s", "CPU s per mission", "wall s", "successes", "plans made"],
-                lines))
+        lines = [run_case("(a) shared plans", f"{{plan = {PLAN_SEEDS}, sim = {SIM_SEEDS}}}",
+                          PLAN_SEEDS * SIM_SEEDS, workers, improve, repeats, Path(scratch)),
+                 run_case("(b) own plans", str(OWN_PLANS), OWN_PLANS, workers, improve,
+                          repeats, Path(scratch))]
+    print(f"{SHARED_MAP.name} with the course's start and goal, gusts {GUSTS:g} N, "
+          f"{SPEED:g} m/s, {ACCELERATION:g} m/s^2, fly's search budget (at most {improve:,} "
+          f"samples of improvement), quadnav batch --workers {workers}, medians of {repeats} "
+          f"repeats; (a) {PLAN_SEEDS} planner seeds x {SIM_SEEDS} simulation seeds, (b) "
+          f"{OWN_PLANS} planner seeds. Stages: medians over the rows, ms (a shared plan's "
+          f"planning and trajectory times are those of the mission that made it)\n")
+    print(table(["case", "CPU s per mission", "planning ms", "trajectory ms", "flight ms",
+                 "successes", "plans made", f"{PROJECTED:,} missions, min"], lines))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--shared-plans", action="store_true",
-                        help="case (a): 200 missions sharing 20 plans on rbe595/map1")
+    parser.add_argument("--cases", action="store_true",
+                        help="cases (a) 200 missions sharing 20 plans and (b) 200 missions "
+                             "of their own plans on rbe595/map1, with the projection")
     args, count, repeats = study_arguments("", parser)
-    if args.shared_plans:
-        shared_plans(args.workers, args.improve, repeats)
+    if args.cases:
+        cases(args.workers, args.improve, repeats)
         return
     jobs = missions(count)
     batch_runs, fly_runs, agree = [], [], []
