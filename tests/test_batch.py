@@ -15,7 +15,7 @@ from quadnav.batch.executor import LocalExecutor
 from quadnav.batch.fly_one import fly_row, load_context
 from quadnav.batch.grid import MissionSpec, Spread, parse_spec, read_spec
 from quadnav.batch.run import BatchRun
-from quadnav.batch.summary import wilson_interval
+from quadnav.batch.summary import percent_text, wilson_interval
 from quadnav.batch.table import NAMES, POINTS, WALL_TIME_COLUMNS, read_rows, same_row
 from quadnav.mission import Mission, MissionSettings, fly_mission
 from quadnav.planning import PlannerSettings
@@ -292,3 +292,12 @@ def test_a_refused_mission_is_a_row_with_its_error(tmp_path):
     assert row["success"] is False and row["path_found"] is False
     assert "inside" in row["error"] and row["start_x"] == 1.0 and row["margin_m"] == 0.2
     assert row["rms_tracking_error_m"] is None and row["seed"] == 0
+
+
+def test_a_rate_or_bound_short_of_all_or_none_never_reads_as_100_or_0_percent():
+    low, high = wilson_interval(10_000, 10_000)
+    assert (percent_text(low), percent_text(high)) == ("99.96", "100.0")
+    low, high = wilson_interval(0, 10_000)
+    assert (percent_text(low), percent_text(high)) == ("0.0", "0.04")
+    assert percent_text(9_999 / 10_000) == "99.99"
+    assert percent_text(0.5, digits=0) == "50" and percent_text(None) == "\u2014"

@@ -41,6 +41,20 @@ def wilson_interval(successes: int, n: int) -> tuple[float, float]:
     return float(interval.low), float(interval.high)
 
 
+def percent_text(fraction: float | None, digits: int = 1) -> str:
+    """``fraction`` in percent with ``digits`` decimals, and more (up to 4) where rounding
+    would make a share that is not 0 or 1 read as 0 or 100 (the interval of 10,000
+    successes in 10,000 missions starts at 99.96 %, not 100.0 %); a dash for None."""
+    if fraction is None:
+        return "\u2014"
+    text = f"{100 * fraction:.{digits}f}"
+    for places in range(digits, 5):
+        text = f"{100 * fraction:.{places}f}"
+        if fraction in (0.0, 1.0) or float(text) not in (0.0, 100.0):
+            break
+    return text
+
+
 def group_values(row: dict[str, Any]) -> dict[str, Any]:
     """The values naming the group of ``row``: :data:`GROUP_COLUMNS`, and the start and
     goal unless they were drawn."""

@@ -31,7 +31,7 @@ from matplotlib.text import Text
 
 from quadnav import __version__
 from quadnav.batch.compare import short_spec
-from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values
+from quadnav.batch.summary import GROUP_COLUMNS, MEDIAN_COLUMNS, group_values, percent_text
 from quadnav.files import atomic_output
 from quadnav.pages import figure, render
 from quadnav.report.html_report import png_bytes
@@ -114,7 +114,7 @@ def _speed(value: float | None) -> str:
 
 
 def _percent(value: float | None) -> str:
-    return "—" if value is None else f"{100 * value:.0f}"
+    return percent_text(value, digits=0)
 
 
 class _Groups:

@@ -19,7 +19,7 @@ from quadnav.batch.grid import (
     read_spec,
 )
 from quadnav.batch.run import BatchRun
-from quadnav.batch.summary import rate
+from quadnav.batch.summary import percent_text, rate
 from quadnav.cli.args import (
     acceleration,
     add_executor_arguments,
@@ -154,8 +154,9 @@ def batch(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - began
     overall = rate(run.finished)
     print(f"{overall['successes']} of {overall['n']} missions reached the goal with no "
-          f"contact, the body inside the map: {100 * overall['success_rate']:.1f} % (95 % interval "
-          f"{100 * overall['ci_low']:.1f} to {100 * overall['ci_high']:.1f} %); "
+          f"contact, the body inside the map: {percent_text(overall['success_rate'])} % "
+          "(95 % interval "
+          f"{percent_text(overall['ci_low'])} to {percent_text(overall['ci_high'])} %); "
           f"{overall['errors']} refused; {overall['short_of_margin']} kept less margin than "
           "asked")
     _print_contenders(run.finished, folder)
@@ -184,8 +185,8 @@ def _print_contenders(rows: list[dict], folder: Path) -> None:
     for name, group in contender_rows(rows, by).items():
         found = rate(group)
         print(f"  {name}: {found['successes']} of {found['n']}, "
-              f"{100 * found['success_rate']:.1f} % ({100 * found['ci_low']:.1f} to "
-              f"{100 * found['ci_high']:.1f} %)")
+              f"{percent_text(found['success_rate'])} % ({percent_text(found['ci_low'])} to "
+              f"{percent_text(found['ci_high'])} %)")
 
 
 def add_batch_command(subparsers: argparse._SubParsersAction) -> None:
