@@ -24,7 +24,7 @@ Every value is checked against its stated range; every mistake is one
 :class:`~quadnav.errors.QuadnavError` naming the spec and, where it can be found, the line.
 Relative paths are resolved against the spec's folder. :meth:`BatchSpec.table` is the spec
 with every path resolved and every default filled in: the batch folder keeps it
-(``batch.json``), and :func:`parse_spec` reads it back to the same spec.
+(``batch.json``), and :func:`spec_from_table` reads it back to the same spec.
 """
 
 from __future__ import annotations
@@ -307,8 +307,8 @@ class BatchSpec:
 
     def table(self) -> dict[str, Any]:
         """The spec as a TOML-like table with every path resolved and every default filled
-        in (but the methods when no mission flies one); :func:`parse_spec` reads it back to
-        this spec."""
+        in (but the methods when no mission flies one); :func:`spec_from_table` reads it
+        back to this spec."""
         methods = {"methods": list(self.methods)} if NO_REFERENCE in self.references else {}
         maps = [{key: list(value) if isinstance(value, tuple) else value
                  for key, value in entry.__dict__.items() if value is not None}
@@ -351,11 +351,12 @@ def read_spec(path: str | Path) -> BatchSpec:
     folder. QuadnavError (one line naming the file and line) for any mistake."""
     path = Path(path)
     table = read_toml(path)
-    return parse_spec(table, path.parent, _Source(str(path), path.read_text(encoding="utf-8")))
+    return spec_from_table(table, path.parent,
+                           _Source(str(path), path.read_text(encoding="utf-8")))
 
 
-def parse_spec(table: dict[str, Any], folder: str | Path,
-               source: _Source | str = "the batch spec") -> BatchSpec:
+def spec_from_table(table: dict[str, Any], folder: str | Path,
+                    source: _Source | str = "the batch spec") -> BatchSpec:
     """A spec from a TOML-like ``table``; relative paths are resolved against ``folder``."""
     src = source if isinstance(source, _Source) else _Source(source)
     folder = Path(folder)

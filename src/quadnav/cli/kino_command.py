@@ -363,8 +363,8 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False,
     when it succeeded (and, if ``strict``, kept the whole margin), else
     :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
     from quadnav.cli.flight_lines import (
+        clearance_text,
         flight_failed,
-        min_clearance,
         tracking_errors,
         warn_margin_shortfall,
     )
@@ -381,7 +381,7 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False,
           f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
           f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, ending with a "
           f"{m['stop_s']:.2f} s stop at the goal)")
-    print(f"  {tracking_errors(m)}; {min_clearance(m)}")
+    print(f"  {tracking_errors(m)}; {clearance_text(m)}")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
           f"rotor energy {m['rotor_energy_j']:.1f} J")
