@@ -62,6 +62,7 @@ from quadnav.limits import (
     Range,
     Speed,
     format_number,
+    is_number,
     speed_value,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
@@ -413,19 +414,15 @@ def _list(table: dict, key: str, src: _Source, default: list | None = None) -> l
     return values
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def _number(value: Any, allowed: Range, key: str, src: _Source) -> float:
-    if not _is_number(value) or value not in allowed:
+    if not is_number(value) or value not in allowed:
         raise src.error(key, f"expected {allowed.describe()}, got {value!r}")
     return int(value) if allowed.whole else float(value)
 
 
 def _point(value: Any, key: str, src: _Source) -> tuple[float, float, float]:
     if not (isinstance(value, list) and len(value) == 3
-            and all(_is_number(v) and v in COORDINATE for v in value)):
+            and all(is_number(v) and v in COORDINATE for v in value)):
         raise src.error(key, f"expected [x, y, z], each {COORDINATE.describe()}, got {value!r}")
     x, y, z = (float(v) for v in value)
     return x, y, z
@@ -461,7 +458,7 @@ def _seeds(value: Any, src: _Source, part: str = "") -> tuple[int, ...]:
 
 def _seed(value: Any, allowed: Range, src: _Source, part: str) -> int:
     """One seed, or a count of seeds, in ``allowed``."""
-    if not _is_number(value) or value not in allowed:
+    if not is_number(value) or value not in allowed:
         raise src.error("seeds", f"{part}expected {allowed.describe()}, got {value!r}")
     return int(value)
 
@@ -477,7 +474,7 @@ def _wind(value: Any, folder: Path, src: _Source) -> Wind:
     if isinstance(value, str):
         return _plugin(value, folder, "winds", wind_maker, src)
     if not (isinstance(value, list) and len(value) == 3
-            and all(_is_number(v) and v in FORCE for v in value)):
+            and all(is_number(v) and v in FORCE for v in value)):
         raise src.error("winds", f"expected [fx, fy, fz] forces, each {FORCE.describe()}, "
                                  f"or a wind class (module:Class or file.py:Class), got "
                                  f"{value!r}")
