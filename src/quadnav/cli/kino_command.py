@@ -28,9 +28,7 @@ one line on stderr with nothing written.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
-import io
 import json
 import sys
 import warnings
@@ -63,6 +61,7 @@ from quadnav.cli.flight_args import (
 )
 from quadnav.cli.progress import fraction_bar, percent_bar
 from quadnav.errors import QuadnavError
+from quadnav.files import numbers_csv
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_TOLERANCE, plan_quadrotor, replay
@@ -124,15 +123,6 @@ def search(label: str, quiet: bool, planner: Callable[[Progress], KinoResult]) -
                                                           f"closest {closest:.2f} m"))
 
 
-def table_csv(header: Sequence[str], columns: Sequence[FloatArray]) -> str:
-    """Columns (each (N,)) as CSV text under ``header``, numbers at full precision."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows([[repr(float(v)) for v in row] for row in np.column_stack(columns)])
-    return out.getvalue()
-
-
 def state_times(result: KinoResult) -> FloatArray:
     """Time (K,) of each planned state, s from the start."""
     return np.concatenate([[0.0], np.cumsum(result.durations)])[:len(result.states)]
@@ -144,9 +134,11 @@ def plan_tables(result: KinoResult, state_names: Sequence[str],
     ``duration`` and the named control columns (each (K - 1,))."""
     times = state_times(result)
     return {
-        "states.csv": table_csv(["t", *state_names], [times, *result.states.T]),
-        "controls.csv": table_csv(["t_start", "duration", *control_columns],
-                                  [times[:-1], result.durations, *control_columns.values()]),
+        "states.csv": numbers_csv(["t", *state_names],
+                                  np.column_stack([times, *result.states.T])),
+        "controls.csv": numbers_csv(["t_start", "duration", *control_columns],
+                                    np.column_stack([times[:-1], result.durations,
+                                                     *control_columns.values()])),
     }
 
 
@@ -264,9 +256,9 @@ def diffdrive(args: argparse.Namespace) -> int:
                          {"v": result.controls[:, 0], "omega": result.controls[:, 1],
                           "left_speed": left_speed, "right_speed": right_speed})
     centre, left, right, t = wheel_tracks(result, model, TRACK_TOLERANCE)
-    tables["tracks.csv"] = table_csv(
+    tables["tracks.csv"] = numbers_csv(
         ["t", "x", "y", "left_x", "left_y", "right_x", "right_y"],
-        [t, *centre.T, *left.T, *right.T])
+        np.column_stack([t, *centre.T, *left.T, *right.T]))
     goal_region = (args.goal, settings.goal_radius)
     figures = {"kino.png": lambda: diffdrive_figure(world, result, model, *goal_region),
                "controls.png": lambda: diffdrive_controls_figure(result, model)}
