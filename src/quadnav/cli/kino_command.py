@@ -76,6 +76,7 @@ from quadnav.limits import (
     MARGIN,
     PLAN_TIME,
 )
+from quadnav.planning.result import Progress
 from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.world import load_world
 
@@ -103,9 +104,6 @@ FLIGHT_KEYS = ("success", "reached_goal", "ending", "flight_time_s", "rms_tracki
                "rotor_energy_j")
 #: Largest deviation, m, of the wheel tracks in tracks.csv from the true wheel paths.
 TRACK_TOLERANCE = 0.01
-
-#: ``progress(fraction of the budget used, distance from the goal to the closest state)``.
-Progress = Callable[[float, float], None]
 
 
 def settings_from(args: argparse.Namespace) -> KinoSettings:
