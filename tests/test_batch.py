@@ -13,7 +13,7 @@ from clitools import assert_user_error, run_here
 
 from quadnav.batch.executor import LocalExecutor
 from quadnav.batch.fly_one import fly_row, load_context
-from quadnav.batch.grid import MissionSpec, Spread, parse_spec, read_spec
+from quadnav.batch.grid import MissionSpec, Spread, read_spec, spec_from_table
 from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import percent_text, wilson_interval
 from quadnav.batch.table import NAMES, POINTS, WALL_TIME_COLUMNS, read_rows, same_row
@@ -70,12 +70,12 @@ maps = ["forest:seed=1", {map = "maps/m.txt", start_goal = "sg.txt", margin = 0.
     assert len(missions) == spec.size == 2 * 2 * 2 * 2 * 2 * 2 * 2
     assert [m.seed for m in missions[:3]] == [0, 5, 0]  # the seed varies fastest
     assert len({m.key for m in missions}) == len(missions)
-    assert parse_spec(spec.table(), "/elsewhere") == spec  # batch.json reads back the same
+    assert spec_from_table(spec.table(), "/elsewhere") == spec  # batch.json reads back the same
 
 
 def test_mission_keys_stay_those_of_earlier_batch_folders():
     # a batch folder written before speeds became one type ("max") resumes: same keys
-    spec = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max", 2.0]}, ".")
+    spec = spec_from_table({"maps": ["forest"], "seeds": [3], "speeds": ["max", 2.0]}, ".")
     assert [(m.speed, m.key) for m in spec.missions()] == [
         ("max", "ab5f7820b3a2679d"), (2.0, "d82baf8f1adb65ac")]
 
@@ -245,8 +245,8 @@ def test_refly_flies_a_row_again_with_figures_and_the_same_metrics(batch, tmp_pa
 
 # ------------------------------------------------------------------------ vehicle spread
 def test_a_spread_vehicle_flies_the_nominal_trajectory_with_the_nominal_controller(tmp_path):
-    spec = parse_spec({"maps": ["window:size=4x6x3,walls=1"], "seeds": [4], "speeds": [3.0],
-                       "spreads": [0.0, 0.3], "improve": 2000}, tmp_path)
+    spec = spec_from_table({"maps": ["window:size=4x6x3,walls=1"], "seeds": [4], "speeds": [3.0],
+                            "spreads": [0.0, 0.3], "improve": 2000}, tmp_path)
     context = load_context(spec)
     nominal, spread = (fly_row(context, mission) for mission in spec.missions())
 
@@ -267,8 +267,8 @@ def test_a_spread_vehicle_flies_the_nominal_trajectory_with_the_nominal_controll
 
 def test_a_drawn_start_and_goal_depend_on_the_seed_alone(tmp_path):
     write_spec(tmp_path)
-    spec = parse_spec({"maps": ["pillar.txt"], "seeds": [7], "speeds": [1.0, 3.0],
-                       "improve": 500}, tmp_path)
+    spec = spec_from_table({"maps": ["pillar.txt"], "seeds": [7], "speeds": [1.0, 3.0],
+                            "improve": 500}, tmp_path)
     context = load_context(spec)
     slow, fast = (fly_row(context, mission) for mission in spec.missions())
     assert slow["start_goal_drawn"] and slow["success"] and fast["success"]
@@ -284,9 +284,9 @@ def test_the_local_executor_runs_any_module_level_function_with_its_shared_data(
 
 
 def test_a_refused_mission_is_a_row_with_its_error(tmp_path):
-    spec = parse_spec({"maps": [{"map": "window:size=4x6x3,walls=1", "start": [1, 3, 1],
-                                 "goal": [2, 5, 1]}],
-                       "seeds": 1, "speeds": [1.0]}, tmp_path)
+    spec = spec_from_table({"maps": [{"map": "window:size=4x6x3,walls=1", "start": [1, 3, 1],
+                                      "goal": [2, 5, 1]}],
+                            "seeds": 1, "speeds": [1.0]}, tmp_path)
     context = load_context(spec)
     row = fly_row(context, spec.missions()[0])
     assert row["success"] is False and row["path_found"] is False

@@ -12,7 +12,7 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.batch.fly_one import mission_config
-from quadnav.batch.grid import parse_spec
+from quadnav.batch.grid import spec_from_table
 from quadnav.batch.table import EARLIER_NAMES, NAMES, read_rows, same_row
 from quadnav.cli.batch_command import batch_spec
 from quadnav.cli.main import build_parser
@@ -34,7 +34,7 @@ def _contenders_spec(folder: Path) -> dict:
 
 
 def test_a_spec_lists_every_kind_of_contender_and_each_mission_flies_its_own():
-    spec = parse_spec(_contenders_spec(EXAMPLES), EXAMPLES)
+    spec = spec_from_table(_contenders_spec(EXAMPLES), EXAMPLES)
 
     assert spec.controllers == ("cascade", "se3", f"{EXAMPLES}/plain_controller.py:PDAttitude")
     assert spec.planners[1] == f"{EXAMPLES}/plain_planner.py:graph_search(resolution=0.5)"
@@ -45,7 +45,7 @@ def test_a_spec_lists_every_kind_of_contender_and_each_mission_flies_its_own():
     missions = spec.missions()
     assert len(missions) == spec.size == 2 * 3 * 2 * 3 * 2
     assert len({m.key for m in missions}) == len(missions)
-    assert parse_spec(spec.table(), "/elsewhere") == spec  # batch.json reads back the same
+    assert spec_from_table(spec.table(), "/elsewhere") == spec  # batch.json reads back the same
     last = missions[-1]
     config = mission_config(spec.fixed, last).table()
     assert config["controller"] == {"name": spec.controllers[-1]}
@@ -64,8 +64,8 @@ def test_a_mission_of_four_plugins_flies_in_a_worker_and_refly_flies_it_again(tm
             "planners": ["plain_planner.py:graph_search(resolution=0.5)"],
             "references": ["plain_trajectory.py:StopAndGo(speed=1.5)"],
             "winds": ["plain_wind.py:GustFront(speed=1.0)"]}
-    parsed = parse_spec(spec, EXAMPLES)
-    assert parse_spec(parsed.table(), "/elsewhere") == parsed
+    parsed = spec_from_table(spec, EXAMPLES)
+    assert spec_from_table(parsed.table(), "/elsewhere") == parsed
     lines = [f"{key} = {json.dumps(value)}" for key, value in spec.items()]
     (tmp_path / "spec.toml").write_text("\n".join(lines) + "\n")
     for name in ("plain_controller.py", "plain_planner.py", "plain_trajectory.py",
@@ -92,9 +92,9 @@ def test_a_mission_of_four_plugins_flies_in_a_worker_and_refly_flies_it_again(tm
 
 
 def test_the_default_contenders_keep_the_mission_keys_of_earlier_batch_folders():
-    plain = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max"]}, ".")
-    named = parse_spec({"maps": ["forest"], "seeds": [3], "speeds": ["max"],
-                        "controllers": ["cascade", "se3"], "method": "minsnap"}, ".")
+    plain = spec_from_table({"maps": ["forest"], "seeds": [3], "speeds": ["max"]}, ".")
+    named = spec_from_table({"maps": ["forest"], "seeds": [3], "speeds": ["max"],
+                             "controllers": ["cascade", "se3"], "method": "minsnap"}, ".")
     assert plain.missions()[0].key == named.missions()[0].key == "ab5f7820b3a2679d"
     assert named.missions()[1].key != "ab5f7820b3a2679d"
 
@@ -113,7 +113,7 @@ def test_flags_give_the_grid_a_spec_gives(monkeypatch):
                     "plain_trajectory.py:StopAndGo(speed=1.5)", "--wind", "0", "0", "0",
                     "--wind", "plain_wind.py:GustFront(speed=2.0)", "--speeds", "2")
 
-    assert table == parse_spec(_contenders_spec(EXAMPLES), EXAMPLES).table()
+    assert table == spec_from_table(_contenders_spec(EXAMPLES), EXAMPLES).table()
     # one wind per --wind, a negative force read as a number
     assert _parsed(WINDOW, "--wind", "-0.01", "0", "0", "--wind", "0", "0.02", "0"
                    )["winds"] == [[-0.01, 0.0, 0.0], [0.0, 0.02, 0.0]]

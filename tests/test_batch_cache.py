@@ -23,7 +23,7 @@ from quadnav.batch.fly_one import (
     mission_settings,
 )
 from quadnav.batch.folder import PLANS, batch_record, begin
-from quadnav.batch.grid import parse_spec, read_spec
+from quadnav.batch.grid import read_spec, spec_from_table
 from quadnav.batch.stages import StageCache
 from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
 from quadnav.control.registry import controller_gains
@@ -76,14 +76,14 @@ def kept_plans(spec_path, tmp_path_factory) -> Path:
 
 
 def test_a_seeds_table_flies_every_planner_seed_with_every_simulation_seed(tmp_path):
-    spec = parse_spec(tomllib.loads(SPEC.replace("sim = 3", "sim = [5, 7, 9]")), tmp_path)
+    spec = spec_from_table(tomllib.loads(SPEC.replace("sim = 3", "sim = [5, 7, 9]")), tmp_path)
 
     assert [(m.seed, m.sim_seed) for m in spec.missions()] == [
         (0, 5), (0, 7), (0, 9), (1, 5), (1, 7), (1, 9)]
     assert spec.size == 6 and spec.table()["seeds"] == {"plan": [0, 1], "sim": [5, 7, 9]}
-    assert parse_spec(spec.table(), tmp_path) == spec
+    assert spec_from_table(spec.table(), tmp_path) == spec
     # one seed for both keeps today's missions, their keys and their settings
-    plain = parse_spec({"maps": [WINDOW], "seeds": 2, "speeds": [2.0]}, tmp_path)
+    plain = spec_from_table({"maps": [WINDOW], "seeds": 2, "speeds": [2.0]}, tmp_path)
     assert [(m.seed, m.sim_seed, m.flight_seed) for m in plain.missions()] == [
         (0, None, 0), (1, None, 1)]
     assert plain.table()["seeds"] == [0, 1]

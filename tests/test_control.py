@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadnav.control.gains import Gains, Limits, course_gain_names
+from quadnav.control.gains import Gains, Saturations, course_gain_names
 from quadnav.control.registry import controller_gains, gain_set_names
 from quadnav.errors import QuadnavError
 from quadnav.sim.flight import Ending
@@ -70,7 +70,7 @@ def test_a_step_settles_without_overshoot_beyond_five_percent(params, axis, size
 
 
 def test_a_long_step_under_the_speed_limit_does_not_wind_up():
-    gains = Gains(limits=Limits(speed_xy=1.5))
+    gains = Gains(limits=Saturations(speed_xy=1.5))
     flight, overshoot, settling = _step(TELLO, 0, 8.0, gains, seconds=12.0)
     speed = np.hypot(flight.velocity[:, 0], flight.velocity[:, 1])
     print(f"8 m step at 1.5 m/s: top speed {speed.max():.3f} m/s, overshoot "

@@ -15,7 +15,7 @@ from clitools import assert_user_error, run_here
 from coursemaps import dead_url, serving, zipped
 from publicmaps import START_GOAL_FILES, START_GOAL_POINTS, far_apart_free_points
 
-from quadnav.batch.grid import parse_spec
+from quadnav.batch.grid import spec_from_table
 from quadnav.world import load_world, read_start_goal
 from quadnav.world.courses import (
     CACHE_ENV,
@@ -171,9 +171,9 @@ def test_course_start_goal_files_are_read_wherever_a_start_goal_file_is(
                       "course:rbe595/p2b_startandgoal_map1", "--margin", "0.1")
     assert result.returncode == 0, result.stderr
     assert "start (0, 0, 0):" in result.stdout and "goal (-0.59, 6.81, 0):" in result.stdout
-    spec = parse_spec({"maps": [{"map": "course:rbe595/p2b_map1",
-                                 "start_goal": "course:rbe595/p2b_startandgoal_map1"}],
-                       "seeds": 1, "speeds": [1.0]}, shared_maps)
+    spec = spec_from_table({"maps": [{"map": "course:rbe595/p2b_map1",
+                                      "start_goal": "course:rbe595/p2b_startandgoal_map1"}],
+                            "seeds": 1, "speeds": [1.0]}, shared_maps)
     assert spec.maps[0].map == "course:rbe595/p2b_map1"
     assert (spec.maps[0].start, spec.maps[0].goal) == ((0, 0, 0), (-0.59, 6.81, 0))
 

@@ -12,7 +12,7 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.batch.fly_one import fly_mission_spec, fly_row, load_context
-from quadnav.batch.grid import parse_spec
+from quadnav.batch.grid import spec_from_table
 from quadnav.batch.stages import StageCache
 from quadnav.cli.main import build_parser
 from quadnav.cli.mission_args import mission_config
@@ -316,8 +316,8 @@ def test_a_setting_the_one_builder_adds_reaches_every_command(tmp_path, monkeypa
         metrics = json.loads((tmp_path / folder / "metrics.json").read_text())
         assert (metrics["seed"], metrics["goal_tolerance_m"]) == (MARK_SEED, MARK_TOLERANCE)
     # each mission of a batch (what a worker runs for it), and tune's missions
-    spec = parse_spec({"maps": [SMALL], "seeds": [1], "speeds": [1.0], "improve": 500},
-                      tmp_path)
+    spec = spec_from_table({"maps": [SMALL], "seeds": [1], "speeds": [1.0], "improve": 500},
+                           tmp_path)
     context = load_context(spec)
     (mission,) = spec.missions()
     assert fly_row(context, mission)["goal_tolerance_m"] == MARK_TOLERANCE
@@ -335,10 +335,10 @@ def test_a_setting_the_one_builder_adds_reaches_every_command(tmp_path, monkeypa
 
 
 def test_fly_flies_the_mission_a_batch_builds_from_the_same_settings(tmp_path):
-    spec = parse_spec({"maps": [SMALL], "seeds": [7], "speeds": [1.0], "accel": 2.0,
-                       "gusts": [0.005], "winds": [[0.005, 0, 0]], "spreads": [0.1],
-                       "vehicle": "rbe595", "gains": ["p2a-starter"], "improve": 500,
-                       "time_cap": 30.0}, tmp_path)
+    spec = spec_from_table({"maps": [SMALL], "seeds": [7], "speeds": [1.0], "accel": 2.0,
+                            "gusts": [0.005], "winds": [[0.005, 0, 0]], "spreads": [0.1],
+                            "vehicle": "rbe595", "gains": ["p2a-starter"], "improve": 500,
+                            "time_cap": 30.0}, tmp_path)
     (mission,) = spec.missions()
     row = fly_mission_spec(load_context(spec), mission)
 

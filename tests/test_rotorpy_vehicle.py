@@ -10,7 +10,7 @@ import pytest
 from clitools import assert_user_error, run_here
 
 from quadnav.batch.fly_one import load_context, mission_settings
-from quadnav.batch.grid import parse_spec, read_spec
+from quadnav.batch.grid import read_spec, spec_from_table
 from quadnav.control.gains import Gains
 from quadnav.errors import QuadnavError
 from quadnav.missionconfig import spread_factors
@@ -165,8 +165,8 @@ def test_a_batch_names_a_rotorpy_vehicle_by_a_file_beside_its_spec(my_params):
 
 
 def test_a_batch_spread_scales_the_rotor_and_parasitic_drag_with_the_linear(my_params):
-    spec = parse_spec({"maps": ["forest"], "seeds": [4], "speeds": [1.0], "spreads": [0.3],
-                       "vehicle": "my_params.py:quad_params"}, my_params.parent)
+    spec = spec_from_table({"maps": ["forest"], "seeds": [4], "speeds": [1.0], "spreads": [0.3],
+                            "vehicle": "my_params.py:quad_params"}, my_params.parent)
     context = load_context(spec)
     mission = spec.missions()[0]
     plant = mission_settings(context, mission).plant

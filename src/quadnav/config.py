@@ -10,7 +10,6 @@ value out of range) is a :class:`~quadnav.errors.QuadnavError` naming the file a
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import tomllib
 from enum import Enum
@@ -23,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from quadnav.arrays import read_only
 from quadnav.errors import QuadnavError
 from quadnav.inputfiles import not_a_file, special_file
+from quadnav.limits import is_number
 
 C = TypeVar("C")
 
@@ -59,7 +59,7 @@ def _value(current: Any, raw: Any, where: str) -> Any:
     if isinstance(current, np.ndarray):
         numbers = raw if isinstance(raw, list) else None
         if (numbers is None or len(numbers) != len(current)
-                or not all(_is_number(v) for v in numbers)):
+                or not all(is_number(v, finite=True) for v in numbers)):
             raise QuadnavError(f"{where}: expected a list of {len(current)} numbers, got {raw!r}")
         return frozen_vector(numbers, len(current))
     if isinstance(current, str):
@@ -74,14 +74,9 @@ def _value(current: Any, raw: Any, where: str) -> Any:
         if not isinstance(raw, int) or isinstance(raw, bool):
             raise QuadnavError(f"{where}: expected a whole number, got {raw!r}")
         return raw
-    if not _is_number(raw):
+    if not is_number(raw, finite=True):
         raise QuadnavError(f"{where}: expected a number, got {raw!r}")
     return float(raw)
-
-
-def _is_number(value: Any) -> bool:
-    return (isinstance(value, int | float) and not isinstance(value, bool)
-            and math.isfinite(value))
 
 
 def from_table(base: C, table: dict[str, Any], where: str) -> C:

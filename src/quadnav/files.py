@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -40,3 +42,20 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         raise WriteError.of(path, error) from None
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def csv_text(header: Sequence[str] | None, rows: Iterable[Iterable[object]]) -> str:
+    """The rows as CSV text (the csv module's quoting, ``\n`` line ends), after the line
+    ``header`` if given."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    if header is not None:
+        writer.writerow(header)
+    writer.writerows(rows)
+    return out.getvalue()
+
+
+def numbers_csv(header: Sequence[str], rows: Iterable[Iterable[float]]) -> str:
+    """Rows of numbers (e.g. an (N, K) array) as CSV text under ``header``, every number
+    at full precision (the shortest text that reads back as exactly it)."""
+    return csv_text(header, ([repr(float(v)) for v in row] for row in rows))

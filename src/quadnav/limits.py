@@ -19,13 +19,22 @@ from typing import Literal
 from quadnav.errors import QuadnavError
 
 
-def format_number(value: float) -> str:
-    """``value`` for a message: whole numbers with thousands separators, else the shortest
-    text that reads back as exactly ``value`` (``10000.001``, never a rounded ``10000`` that
-    would contradict the range it is refused by)."""
+def is_number(value: object, finite: bool = False) -> bool:
+    """Whether ``value`` is a number as JSON and TOML read one (an int or a float, never a
+    bool); with ``finite``, also neither infinite nor NaN."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    return not finite or math.isfinite(value)
+
+
+def format_number(value: float, grouped: bool = True) -> str:
+    """The shortest text that reads back as exactly ``value`` (``3`` rather than ``3.0``;
+    ``10000.001``, never a rounded ``10000`` that would contradict the range it is refused
+    by); whole numbers with thousands separators when ``grouped`` (for messages; a map
+    file writes them plain)."""
     if isinstance(value, int) or (math.isfinite(value) and float(value).is_integer()
                                   and abs(value) < 1e15):
-        return f"{int(value):,}"
+        return f"{int(value):,}" if grouped else str(int(value))
     return repr(float(value))
 
 
@@ -48,7 +57,7 @@ class Range:
     whole: bool = False
 
     def __contains__(self, value: object) -> bool:
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        if not is_number(value):
             return False
         if self.whole and not (isinstance(value, int) or float(value).is_integer()):
             return False

@@ -34,7 +34,7 @@ from quadnav.control.registry import (
 from quadnav.errors import PlanningWarning
 from quadnav.planning import PlannerSettings, PlanningProblem, PlanResult, make_problem, plan
 from quadnav.planning.refine import refine
-from quadnav.planning.result import path_length
+from quadnav.planning.result import Progress, path_length
 from quadnav.planning.stall import StallRule
 from quadnav.plugins import parse_spec
 from quadnav.sim.flight import Ending, Flight
@@ -388,7 +388,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
 
 def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | None = None,
                 margin: float | None = None, settings: MissionSettings | None = None,
-                planning_progress: Callable[[float, float], None] | None = None,
+                planning_progress: Progress | None = None,
                 flight_progress: Callable[[float], None] | None = None) -> Mission:
     """Plan, smooth, make a trajectory and fly it.
 
@@ -412,7 +412,7 @@ def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | 
 
 
 def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = None,
-                planning_progress: Callable[[float, float], None] | None = None,
+                planning_progress: Progress | None = None,
                 flight_progress: Callable[[float], None] | None = None) -> Mission:
     """:func:`fly_mission` for a query already checked by
     :func:`~quadnav.planning.make_problem` (so bad input fails before any work)."""
@@ -423,7 +423,7 @@ def fly_problem(problem: PlanningProblem, settings: MissionSettings | None = Non
 
 
 def plan_mission(problem: PlanningProblem, settings: MissionSettings,
-                 progress: Callable[[float, float], None] | None = None) -> Mission:
+                 progress: Progress | None = None) -> Mission:
     """The planning stage of :func:`fly_problem`: the path found (and refined), with
     neither trajectory nor flight yet, to fly with :func:`fly_plan`."""
     began = time.perf_counter()

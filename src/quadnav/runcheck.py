@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from quadnav.errors import QuadnavError
+from quadnav.limits import is_number
 from quadnav.sim.flight import Ending
 
 #: Key endings of metrics.json that hold a number (or null, or a list of numbers): metres,
@@ -60,14 +61,10 @@ def _kind(value: Any) -> str:
         type(value), "a number")
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def _numeric(value: Any) -> bool:
     """A number, null, or a list of numbers (a per-axis margin)."""
-    return (value is None or _is_number(value)
-            or (isinstance(value, list) and all(map(_is_number, value))))
+    return (value is None or is_number(value)
+            or (isinstance(value, list) and all(map(is_number, value))))
 
 
 def check_metrics(metrics: dict, path: Path, flown: bool, track: bool) -> None:
@@ -94,11 +91,11 @@ def check_metrics(metrics: dict, path: Path, flown: bool, track: bool) -> None:
     if not flown:
         return
     need("ending", lambda v: isinstance(v, str), "a string")
-    need("rms_tracking_error_m", _is_number, "a number")
+    need("rms_tracking_error_m", is_number, "a number")
     if not track:
-        need("speed_m_s", _is_number, "a number")
+        need("speed_m_s", is_number, "a number")
     if metrics.get("source") == "tello":
-        need("margin_m", _is_number, "a number")
+        need("margin_m", is_number, "a number")
     _check_outcome(metrics, need)
 
 
@@ -107,20 +104,20 @@ def _check_outcome(metrics: dict, need: Callable[[str, Callable[[Any], bool], st
     """The keys that say how the flight ended (:func:`quadnav.runs.run_outcome`) and, for a
     step response, what the step was."""
     if metrics["success"] and metrics.get("margin_shortfall_m"):
-        need("flight_margin_m", _is_number, "a number")
+        need("flight_margin_m", is_number, "a number")
     if not metrics["success"] and metrics["ending"] == Ending.COMPLETED.value:
         if metrics.get("body_outside_m"):
-            need("body_outside_since_s", _is_number, "a number")
+            need("body_outside_since_s", is_number, "a number")
         else:
-            need("final_error_m", _is_number, "a number")
+            need("final_error_m", is_number, "a number")
     if not metrics["success"] and metrics["ending"] != Ending.COMPLETED.value:
-        need("contact_time_s", _is_number, "a number")
+        need("contact_time_s", is_number, "a number")
     if "overshoot_percent" in metrics:
         need("step_axis", lambda v: v in ("x", "y", "z"), "x, y or z")
         need("goal", lambda v: isinstance(v, list) and len(v) == 3
-             and all(map(_is_number, v)), "a list of 3 numbers")
+             and all(map(is_number, v)), "a list of 3 numbers")
         for key in ("step_size_m", "step_time_s", "steady_state_error_m", "overshoot_percent"):
-            need(key, _is_number, "a number")
+            need(key, is_number, "a number")
 
 
 def check_rows(rows: np.ndarray, path: Path, least: int = 0, times: bool = False,

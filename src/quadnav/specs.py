@@ -221,7 +221,7 @@ def format_values(params: Sequence[Param], values: dict[str, Value]) -> str:
     return ",".join(f"{p.name}={p.format(values[p.name])}" for p in params)
 
 
-def parse_spec(name: str, params: Sequence[Param], rest: str | None) -> tuple[str, dict]:
+def canonical_spec(name: str, params: Sequence[Param], rest: str | None) -> tuple[str, dict]:
     """The canonical spec (``name:`` and every parameter, :func:`format_values`) and the
     values of a spec ``name[:rest]``: ``rest`` is the text after the ``:`` (None without
     one: every default). SpecError as :func:`parse_values`."""

@@ -15,8 +15,6 @@ below :data:`ALPHA`.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 import warnings
@@ -31,7 +29,7 @@ from scipy.stats import binomtest, wilcoxon
 from quadnav.batch.summary import group_values, rate
 from quadnav.batch.table import AXES as XYZ
 from quadnav.errors import QuadnavError
-from quadnav.files import atomic_output
+from quadnav.files import atomic_output, csv_text
 
 #: Significance level of every comparison, after Holm's correction.
 ALPHA = 0.05
@@ -304,13 +302,10 @@ def write_tables(result: dict[str, Any], folder: Path) -> list[str]:
         tmp.write_text(json.dumps(result, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     header = ["rank", "contender", "n", "successes", "success_rate", "ci_low", "ci_high",
               *(f"{m.name}_{part}" for m in METRICS for part in SPREAD_PARTS)]
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    for entry in result["contenders"]:
-        writer.writerow([entry["rank"], entry["contender"], entry["n"], entry["successes"],
-                         entry["success_rate"], entry["ci_low"], entry["ci_high"],
-                         *(entry[m.name][part] for m in METRICS for part in SPREAD_PARTS)])
+    rows = ([entry["rank"], entry["contender"], entry["n"], entry["successes"],
+             entry["success_rate"], entry["ci_low"], entry["ci_high"],
+             *(entry[m.name][part] for m in METRICS for part in SPREAD_PARTS)]
+            for entry in result["contenders"])
     with atomic_output(folder / COMPARE_CSV) as tmp:
-        tmp.write_text(buffer.getvalue(), encoding="utf-8")
+        tmp.write_text(csv_text(header, rows), encoding="utf-8")
     return [COMPARE_CSV, COMPARE_JSON]

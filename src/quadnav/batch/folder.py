@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from quadnav.batch.fly_one import BatchContext
-from quadnav.batch.grid import NO_REFERENCE, BatchSpec, MissionSpec, parse_spec
+from quadnav.batch.grid import NO_REFERENCE, BatchSpec, MissionSpec, spec_from_table
 from quadnav.batch.summary import SUMMARY_JSON, summary, write_summary
 from quadnav.batch.summary_page import SUMMARY_HTML, write_summary_page
 from quadnav.batch.table import (
@@ -115,8 +115,8 @@ def current_record(record: dict[str, Any]) -> dict[str, Any]:
 
 def recorded_spec(folder: Path) -> BatchSpec:
     """The spec of the batch in ``folder`` (from batch.json)."""
-    return parse_spec(current_record(read_record(folder))["spec"], folder,
-                      str(folder / BATCH_JSON))
+    return spec_from_table(current_record(read_record(folder))["spec"], folder,
+                           str(folder / BATCH_JSON))
 
 
 def batch_rows(folder: Path, spec: BatchSpec | None = None) -> list[dict[str, Any]]:

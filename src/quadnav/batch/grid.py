@@ -24,7 +24,7 @@ Every value is checked against its stated range; every mistake is one
 :class:`~quadnav.errors.QuadnavError` naming the spec and, where it can be found, the line.
 Relative paths are resolved against the spec's folder. :meth:`BatchSpec.table` is the spec
 with every path resolved and every default filled in: the batch folder keeps it
-(``batch.json``), and :func:`parse_spec` reads it back to the same spec.
+(``batch.json``), and :func:`spec_from_table` reads it back to the same spec.
 """
 
 from __future__ import annotations
@@ -62,6 +62,7 @@ from quadnav.limits import (
     Range,
     Speed,
     format_number,
+    is_number,
     speed_value,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE
@@ -307,8 +308,8 @@ class BatchSpec:
 
     def table(self) -> dict[str, Any]:
         """The spec as a TOML-like table with every path resolved and every default filled
-        in (but the methods when no mission flies one); :func:`parse_spec` reads it back to
-        this spec."""
+        in (but the methods when no mission flies one); :func:`spec_from_table` reads it
+        back to this spec."""
         methods = {"methods": list(self.methods)} if NO_REFERENCE in self.references else {}
         maps = [{key: list(value) if isinstance(value, tuple) else value
                  for key, value in entry.__dict__.items() if value is not None}
@@ -351,11 +352,12 @@ def read_spec(path: str | Path) -> BatchSpec:
     folder. QuadnavError (one line naming the file and line) for any mistake."""
     path = Path(path)
     table = read_toml(path)
-    return parse_spec(table, path.parent, _Source(str(path), path.read_text(encoding="utf-8")))
+    return spec_from_table(table, path.parent,
+                           _Source(str(path), path.read_text(encoding="utf-8")))
 
 
-def parse_spec(table: dict[str, Any], folder: str | Path,
-               source: _Source | str = "the batch spec") -> BatchSpec:
+def spec_from_table(table: dict[str, Any], folder: str | Path,
+                    source: _Source | str = "the batch spec") -> BatchSpec:
     """A spec from a TOML-like ``table``; relative paths are resolved against ``folder``."""
     src = source if isinstance(source, _Source) else _Source(source)
     folder = Path(folder)
@@ -412,19 +414,15 @@ def _list(table: dict, key: str, src: _Source, default: list | None = None) -> l
     return values
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def _number(value: Any, allowed: Range, key: str, src: _Source) -> float:
-    if not _is_number(value) or value not in allowed:
+    if not is_number(value) or value not in allowed:
         raise src.error(key, f"expected {allowed.describe()}, got {value!r}")
     return int(value) if allowed.whole else float(value)
 
 
 def _point(value: Any, key: str, src: _Source) -> tuple[float, float, float]:
     if not (isinstance(value, list) and len(value) == 3
-            and all(_is_number(v) and v in COORDINATE for v in value)):
+            and all(is_number(v) and v in COORDINATE for v in value)):
         raise src.error(key, f"expected [x, y, z], each {COORDINATE.describe()}, got {value!r}")
     x, y, z = (float(v) for v in value)
     return x, y, z
@@ -460,7 +458,7 @@ def _seeds(value: Any, src: _Source, part: str = "") -> tuple[int, ...]:
 
 def _seed(value: Any, allowed: Range, src: _Source, part: str) -> int:
     """One seed, or a count of seeds, in ``allowed``."""
-    if not _is_number(value) or value not in allowed:
+    if not is_number(value) or value not in allowed:
         raise src.error("seeds", f"{part}expected {allowed.describe()}, got {value!r}")
     return int(value)
 
@@ -476,7 +474,7 @@ def _wind(value: Any, folder: Path, src: _Source) -> Wind:
     if isinstance(value, str):
         return _plugin(value, folder, "winds", wind_maker, src)
     if not (isinstance(value, list) and len(value) == 3
-            and all(_is_number(v) and v in FORCE for v in value)):
+            and all(is_number(v) and v in FORCE for v in value)):
         raise src.error("winds", f"expected [fx, fy, fz] forces, each {FORCE.describe()}, "
                                  f"or a wind class (module:Class or file.py:Class), got "
                                  f"{value!r}")

@@ -32,7 +32,7 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 
 from quadnav.errors import QuadnavError
-from quadnav.files import atomic_output
+from quadnav.files import atomic_output, csv_text
 from quadnav.limits import MAX_SPEED
 
 if TYPE_CHECKING:
@@ -190,9 +190,7 @@ def _parse(text: str, kind: str) -> Any:
 
 def csv_line(row: dict[str, Any]) -> str:
     """One row as a line of CSV (with its newline)."""
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="\n").writerow(_text(row[name]) for name in NAMES)
-    return buffer.getvalue()
+    return csv_text(None, [[_text(row[name]) for name in NAMES]])
 
 
 HEADER = ",".join(NAMES) + "\n"

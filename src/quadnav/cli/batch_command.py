@@ -15,8 +15,8 @@ from quadnav.batch.grid import (
     DEFAULT_METHOD,
     NO_REFERENCE,
     BatchSpec,
-    parse_spec,
     read_spec,
+    spec_from_table,
 )
 from quadnav.batch.run import BatchRun
 from quadnav.batch.summary import percent_text, rate
@@ -80,7 +80,7 @@ def batch_spec(args: argparse.Namespace) -> BatchSpec:
                 "winds": None if args.winds is None else [_wind(w) for w in args.winds]}
     optional |= {key: getattr(args, key) for key in CONTENDER_FLAGS}
     table |= {key: value for key, value in optional.items() if value is not None}
-    return parse_spec(table, Path.cwd(), "the command line")
+    return spec_from_table(table, Path.cwd(), "the command line")
 
 
 def _wind(values: list[float | str]) -> list[float] | str:

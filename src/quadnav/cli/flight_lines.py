@@ -21,7 +21,7 @@ def tracking_errors(m: dict) -> str:
             f"{100 * m['final_error_m']:.2f} cm")
 
 
-def min_clearance(m: dict) -> str:
+def clearance_text(m: dict) -> str:
     """``min clearance d m``, or ``min clearance none (no blocks)``."""
     clearance = m["min_clearance_m"]
     return "min clearance " + ("none (no blocks)" if clearance is None else

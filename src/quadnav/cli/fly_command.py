@@ -24,8 +24,8 @@ from quadnav.cli.flight_args import (
     add_vehicle_arguments,
 )
 from quadnav.cli.flight_lines import (
+    clearance_text,
     flight_failed,
-    min_clearance,
     simulation_time,
     tracking_errors,
     warn_margin_shortfall,
@@ -92,7 +92,7 @@ def print_summary(mission: Mission) -> bool:
         return False
     print(f"  path {m['path_length_m']:.2f} m, trajectory {m['trajectory_duration_s']:.2f} s, "
           f"flight {m['ending']} after {m['flight_time_s']:.2f} s")
-    print(f"  {tracking_errors(m)}; {min_clearance(m)}")
+    print(f"  {tracking_errors(m)}; {clearance_text(m)}")
     legs = ("" if m["trajectory_leg_margin_m"] is None else
             f"; on the legs out of it {m['trajectory_leg_margin_m']:.3f} m")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the trajectory and "

@@ -28,9 +28,7 @@ one line on stderr with nothing written.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
-import io
 import json
 import sys
 import warnings
@@ -63,6 +61,7 @@ from quadnav.cli.flight_args import (
 )
 from quadnav.cli.progress import fraction_bar, percent_bar
 from quadnav.errors import QuadnavError
+from quadnav.files import numbers_csv
 from quadnav.kinodynamic.diffdrive import DiffDrive, plan_diffdrive, wheel_tracks
 from quadnav.kinodynamic.pointmass import SampledQuadrotor
 from quadnav.kinodynamic.quadrotor import REPLAY_TOLERANCE, plan_quadrotor, replay
@@ -77,6 +76,7 @@ from quadnav.limits import (
     MARGIN,
     PLAN_TIME,
 )
+from quadnav.planning.result import Progress
 from quadnav.runfolder import check_output_folder, replaced_folder
 from quadnav.world import load_world
 
@@ -105,9 +105,6 @@ FLIGHT_KEYS = ("success", "reached_goal", "ending", "flight_time_s", "rms_tracki
 #: Largest deviation, m, of the wheel tracks in tracks.csv from the true wheel paths.
 TRACK_TOLERANCE = 0.01
 
-#: ``progress(fraction of the budget used, distance from the goal to the closest state)``.
-Progress = Callable[[float, float], None]
-
 
 def settings_from(args: argparse.Namespace) -> KinoSettings:
     """Search settings from the command-line flags."""
@@ -124,15 +121,6 @@ def search(label: str, quiet: bool, planner: Callable[[Progress], KinoResult]) -
                                                           f"closest {closest:.2f} m"))
 
 
-def table_csv(header: Sequence[str], columns: Sequence[FloatArray]) -> str:
-    """Columns (each (N,)) as CSV text under ``header``, numbers at full precision."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows([[repr(float(v)) for v in row] for row in np.column_stack(columns)])
-    return out.getvalue()
-
-
 def state_times(result: KinoResult) -> FloatArray:
     """Time (K,) of each planned state, s from the start."""
     return np.concatenate([[0.0], np.cumsum(result.durations)])[:len(result.states)]
@@ -144,9 +132,11 @@ def plan_tables(result: KinoResult, state_names: Sequence[str],
     ``duration`` and the named control columns (each (K - 1,))."""
     times = state_times(result)
     return {
-        "states.csv": table_csv(["t", *state_names], [times, *result.states.T]),
-        "controls.csv": table_csv(["t_start", "duration", *control_columns],
-                                  [times[:-1], result.durations, *control_columns.values()]),
+        "states.csv": numbers_csv(["t", *state_names],
+                                  np.column_stack([times, *result.states.T])),
+        "controls.csv": numbers_csv(["t_start", "duration", *control_columns],
+                                    np.column_stack([times[:-1], result.durations,
+                                                     *control_columns.values()])),
     }
 
 
@@ -264,9 +254,9 @@ def diffdrive(args: argparse.Namespace) -> int:
                          {"v": result.controls[:, 0], "omega": result.controls[:, 1],
                           "left_speed": left_speed, "right_speed": right_speed})
     centre, left, right, t = wheel_tracks(result, model, TRACK_TOLERANCE)
-    tables["tracks.csv"] = table_csv(
+    tables["tracks.csv"] = numbers_csv(
         ["t", "x", "y", "left_x", "left_y", "right_x", "right_y"],
-        [t, *centre.T, *left.T, *right.T])
+        np.column_stack([t, *centre.T, *left.T, *right.T]))
     goal_region = (args.goal, settings.goal_radius)
     figures = {"kino.png": lambda: diffdrive_figure(world, result, model, *goal_region),
                "controls.png": lambda: diffdrive_controls_figure(result, model)}
@@ -363,8 +353,8 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False,
     when it succeeded (and, if ``strict``, kept the whole margin), else
     :data:`EXIT_NOT_REACHED` (saying why on stderr)."""
     from quadnav.cli.flight_lines import (
+        clearance_text,
         flight_failed,
-        min_clearance,
         tracking_errors,
         warn_margin_shortfall,
     )
@@ -381,7 +371,7 @@ def write_flight(flown: KinoFlight, folder: Path, strict: bool = False,
           f"vehicle: {'success' if m['success'] else 'FAILED'}, flight {m['ending']} after "
           f"{m['flight_time_s']:.2f} s (plan {m['plan_duration_s']:.2f} s, ending with a "
           f"{m['stop_s']:.2f} s stop at the goal)")
-    print(f"  {tracking_errors(m)}; {min_clearance(m)}")
+    print(f"  {tracking_errors(m)}; {clearance_text(m)}")
     print(f"  margin kept {m['trajectory_margin_m']:.3f} m by the plan and "
           f"{m['flight_margin_m']:.3f} m by the flight (asked {m['margin_m']:g} m); "
           f"rotor energy {m['rotor_energy_j']:.1f} J")

@@ -6,9 +6,12 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tqdm import tqdm
+
+if TYPE_CHECKING:  # the planning stage is imported only by the commands that plan
+    from quadnav.planning.result import Progress
 
 
 def terminal_bar(quiet: bool, **options: Any) -> tqdm:
@@ -42,7 +45,7 @@ def percent_bar(name: str, quiet: bool) -> Iterator[Callable[[float, str | None]
 
 
 @contextmanager
-def planning_bar(name: str, quiet: bool) -> Iterator[Callable[[float, float], None]]:
+def planning_bar(name: str, quiet: bool) -> Iterator[Progress]:
     """A :func:`percent_bar` for a search; yields ``progress(fraction of the budget, best
     length m)``."""
     with percent_bar(name, quiet) as progress:

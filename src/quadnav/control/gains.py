@@ -78,8 +78,8 @@ def _listed(values: FloatArray) -> str:
 
 
 @dataclass(frozen=True, eq=False)
-class Limits:
-    """Saturations of the cascade.
+class Saturations:
+    """Saturations of the cascade (a gains file's ``[limits]`` table).
 
     Attributes:
         speed_xy: largest horizontal velocity setpoint, m/s.
@@ -145,7 +145,7 @@ class Gains:
     attitude_kp: FloatArray = vector_field(12.0, 12.0, 5.0)
     rate: PID = field(default_factory=lambda: _pid(
         (40.0, 40.0, 15.0), (10.0, 10.0, 5.0), (0.3, 0.3, 0.0), (30.0, 30.0, 10.0)))
-    limits: Limits = field(default_factory=Limits)
+    limits: Saturations = field(default_factory=Saturations)
 
     def __post_init__(self) -> None:
         require(gain_checks(self, ("attitude_kp",)))

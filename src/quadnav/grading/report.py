@@ -6,15 +6,13 @@ from the rows of :func:`~quadnav.grading.grade_one.grade_mission`."""
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from quadnav import __version__
-from quadnav.files import atomic_output
+from quadnav.files import atomic_output, csv_text
 from quadnav.grading.course import Course
 from quadnav.grading.grade_one import BASELINE, OUTCOMES, SUBMISSION
 from quadnav.pages import figure, render
@@ -103,20 +101,18 @@ def write_grade(folder: Path, course: Course, submission: Path,
 
 def grade_csv(content: dict[str, Any]) -> str:
     """grade.csv: a line per mission graded (:data:`CSV_COLUMNS`)."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(CSV_COLUMNS)
+    rows = []
     for mission in content["missions"]:
         own, base = mission[SUBMISSION], mission[BASELINE] or {}
         if own is None:
             continue
         metrics, base_metrics = own["metrics"], base.get("metrics", {})
-        writer.writerow([mission["map"], mission["seed"], own["passed"], own["outcome"],
-                         own["reason"], metrics.get("time_to_goal_s"),
-                         metrics.get("rms_tracking_error_m"), metrics.get("flight_margin_m"),
-                         base.get("passed"), base_metrics.get("time_to_goal_s"),
-                         base_metrics.get("rms_tracking_error_m"), own["folder"]])
-    return out.getvalue()
+        rows.append([mission["map"], mission["seed"], own["passed"], own["outcome"],
+                     own["reason"], metrics.get("time_to_goal_s"),
+                     metrics.get("rms_tracking_error_m"), metrics.get("flight_margin_m"),
+                     base.get("passed"), base_metrics.get("time_to_goal_s"),
+                     base_metrics.get("rms_tracking_error_m"), own["folder"]])
+    return csv_text(CSV_COLUMNS, rows)
 
 
 # ------------------------------------------------------------------------------ the page

@@ -30,7 +30,6 @@ import itertools
 import math
 import time
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,7 +43,7 @@ from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.tree import ControlTree
 from quadnav.kinodynamic.world2d import World2D, format_rect
 from quadnav.planning.legs import find_leg
-from quadnav.planning.result import path_length
+from quadnav.planning.result import Progress, path_length
 
 NAME = "diffdrive"
 #: Largest distance between a checked chord and the arc it stands for, metres.
@@ -56,9 +55,6 @@ LEG_SPEED = 0.5
 GOAL_SPREAD = 0.5
 #: Wall time between two progress reports, s.
 PROGRESS_SECONDS = 0.1
-#: ``progress(fraction of the budget used in [0, 1], distance from the goal to the tree's
-#: closest state in metres)``.
-KinoProgress = Callable[[float, float], None]
 
 
 @dataclass(frozen=True)
@@ -318,7 +314,7 @@ def _extend(free: World2D, state: FloatArray, controls: FloatArray, duration: fl
 
 def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: KinoSettings,
                    model: DiffDrive | None = None, margin: float = 0.0,
-                   progress: KinoProgress | None = None) -> KinoResult:
+                   progress: Progress | None = None) -> KinoResult:
     """Kinodynamic RRT for a differential-drive robot.
 
     Each iteration draws a target point (:func:`_sample_target`), takes the tree state
@@ -339,7 +335,8 @@ def plan_diffdrive(world: World2D, start: ArrayLike, goal: ArrayLike, settings: 
         settings: budgets, seed, sampling.
         model: the robot; ``None``: :class:`DiffDrive` defaults.
         margin: safety margin kept around the robot's footprint, m, >= 0.
-        progress: called about every :data:`PROGRESS_SECONDS` (see :data:`KinoProgress`).
+        progress: called about every :data:`PROGRESS_SECONDS` (see
+            :data:`~quadnav.planning.result.Progress`).
 
     Returns:
         A :class:`KinoResult` named ``"diffdrive"``: states (K, 3), controls (K - 1, 2)

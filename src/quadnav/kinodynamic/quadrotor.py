@@ -40,7 +40,6 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,6 +52,7 @@ from quadnav.kinodynamic.result import KinoResult
 from quadnav.kinodynamic.settings import KinoSettings
 from quadnav.kinodynamic.tree import ControlTree
 from quadnav.planning.problem import make_problem
+from quadnav.planning.result import Progress
 from quadnav.world.model import World
 
 #: Largest distance, m, from a tree motion to the chords it is checked by.
@@ -71,11 +71,6 @@ REPLAY_STEP = 1e-3
 #: Measured (largest error of any state component): 7e-12 on 20-40 s flights across the
 #: 20 m forest, the window world and map1; 7e-11 on a 170 s flight across a 100 m forest.
 REPLAY_TOLERANCE = 1e-9
-
-#: ``progress(fraction of the budget used in [0, 1], distance from the goal to the closest
-#: tree state, m)``.
-Progress = Callable[[float, float], None]
-
 
 class _Tree(ControlTree):
     """The tree's arrays and, per vertex, the point :meth:`nearest` measures from."""

@@ -12,17 +12,12 @@ from pydantic import BeforeValidator, ValidationInfo
 from pydantic_core import PydanticCustomError
 
 from quadnav.errors import QuadnavError
-from quadnav.limits import COORDINATE, SPEED, Range, Speed, speed_value
+from quadnav.limits import COORDINATE, SPEED, Range, Speed, is_number, speed_value
 
 
 def fail(message: str) -> PydanticCustomError:
     """A refusal whose message is ``message`` as it is (pydantic adds nothing)."""
     return PydanticCustomError("quadnav", message)
-
-
-def is_number(value: Any) -> bool:
-    """Whether ``value`` is a number as TOML writes one (not true or false)."""
-    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def number(allowed: Range, optional: bool = False) -> BeforeValidator:

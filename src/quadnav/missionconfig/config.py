@@ -31,7 +31,7 @@ from quadnav.missionconfig.sections import (
     Trajectory,
 )
 from quadnav.missionconfig.source import Source
-from quadnav.planning import PlannerSettings, PlanningProblem, make_problem
+from quadnav.planning import PlannerSettings, PlanningProblem, Progress, make_problem
 from quadnav.planning.stall import stall_rule
 from quadnav.sim.settings import SimSettings, default_record_rate
 from quadnav.trajectory.generate import TrajectorySettings
@@ -233,7 +233,7 @@ class MissionConfig(Section):
         start, goal = self.ends(world)
         return make_problem(world, start, goal, self.margin(world), body)
 
-    def fly(self, planning_progress: Callable[[float, float], None] | None = None,
+    def fly(self, planning_progress: Progress | None = None,
             flight_progress: Callable[[float], None] | None = None) -> Mission:
         """Load, check and fly the whole mission (:func:`~quadnav.mission.fly_problem`)."""
         settings = self.settings()

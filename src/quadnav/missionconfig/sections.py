@@ -21,6 +21,7 @@ from quadnav.limits import (
     SPREAD,
     STALL_FRACTION,
     Speed,
+    is_number,
 )
 from quadnav.mission import DEFAULT_ACCELERATION, DEFAULT_IMPROVE, DEFAULT_SPEED, DEFAULT_TIME_CAP
 from quadnav.missionconfig.checks import (
@@ -30,7 +31,6 @@ from quadnav.missionconfig.checks import (
     fail,
     file,
     flag,
-    is_number,
     number,
     text,
     top_speed,

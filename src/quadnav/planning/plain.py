@@ -34,7 +34,7 @@ import numpy as np
 
 from quadnav.limits import MAX_WAYPOINTS
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.result import PlanResult, PlanStats, distinct, path_length
+from quadnav.planning.result import PlanResult, PlanStats, Progress, distinct, path_length
 from quadnav.planning.settings import PlannerSettings
 from quadnav.plugins import check_call, literal_arrays, raised_in, takes_keyword
 from quadnav.world.margins import polyline_margin
@@ -74,7 +74,7 @@ class PlainPlanner:
         return cls(text, function, arguments)
 
     def __call__(self, problem: PlanningProblem, settings: PlannerSettings,
-                 progress: Callable[[float, float], None] | None = None) -> PlanResult:
+                 progress: Progress | None = None) -> PlanResult:
         """Call the function on ``problem`` and check what it returns (``progress`` is not
         reported: the function runs as one call)."""
         kwargs = dict(self.kwargs)

@@ -27,12 +27,10 @@ from collections.abc import Callable
 from quadnav.errors import QuadnavError
 from quadnav.planning.plain import PlainPlanner
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.result import PlanResult
+from quadnav.planning.result import PlanResult, Progress
 from quadnav.planning.settings import PlannerSettings
 from quadnav.plugins import Registry, parse_spec
 
-#: ``progress(fraction of the budget used in [0, 1], best path length so far or inf)``.
-Progress = Callable[[float, float], None]
 #: ``planner(problem, settings, progress or None) -> PlanResult``.
 Planner = Callable[[PlanningProblem, PlannerSettings, Progress | None], PlanResult]
 

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from typing import Any
 
 import numpy as np
 
+from quadnav.files import numbers_csv
 from quadnav.limits import PLAN_ITERATIONS
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import PlanResult, PlanStats
@@ -17,11 +16,7 @@ from quadnav.planning.settings import PlannerSettings
 
 def path_csv(path: np.ndarray) -> str:
     """The path (N, 3) as CSV text with the header ``x,y,z`` (metres, full precision)."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["x", "y", "z"])
-    writer.writerows([[repr(float(v)) for v in row] for row in path])
-    return out.getvalue()
+    return numbers_csv(("x", "y", "z"), path)
 
 
 def _number(value: float | None) -> float | None:

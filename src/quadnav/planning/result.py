@@ -8,6 +8,7 @@ the same way.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,6 +18,11 @@ from quadnav.arrays import FloatArray, frozen, read_only
 from quadnav.limits import PLAN_ITERATIONS
 
 IntArray = NDArray[np.int64]
+#: ``progress(fraction of the budget used in [0, 1], how close the search is)``, called
+#: while a search runs: the second number is the best path length so far in metres (inf
+#: before one is found) for a path planner, the distance in metres from the goal to the
+#: tree's closest state for a kinodynamic one.
+Progress = Callable[[float, float], None]
 
 
 def path_length(path: FloatArray) -> float:

@@ -22,8 +22,7 @@ import numpy as np
 from quadnav.limits import PLAN_ITERATIONS
 from quadnav.planning.nodegrid import new_node_grid, rebuild
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.registry import Progress
-from quadnav.planning.result import PlanResult, PlanStats, no_path_message
+from quadnav.planning.result import PlanResult, PlanStats, Progress, no_path_message
 from quadnav.planning.rrtstar_kernel import (
     BEST_COST,
     BEST_VERTEX,

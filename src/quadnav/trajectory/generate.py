@@ -38,7 +38,7 @@ from quadnav.trajectory.polynomials.cubic import cubic_spline
 from quadnav.trajectory.polynomials.minsnap import minimum_snap
 from quadnav.trajectory.polynomials.minsnap_qp import minimum_snap_qp
 from quadnav.trajectory.polynomials.quintic import quintic_average, quintic_c2, quintic_segments
-from quadnav.trajectory.timing.retime import fastest_times, knots, stretch_where_fast
+from quadnav.trajectory.timing.retime import Build, fastest_times, knots, stretch_where_fast
 from quadnav.trajectory.timing.segment_times import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
@@ -48,8 +48,6 @@ from quadnav.trajectory.timing.segment_times import (
 )
 from quadnav.world.model import World
 
-#: ``generator(waypoints (N, 3), segment times (N - 1,) s) -> Trajectory``.
-Generator = Callable[[FloatArray, FloatArray], Trajectory]
 #: ``method(waypoints (N, 3) m, segment times (N - 1,) s, settings) -> Trajectory``: a
 #: shape through every waypoint at the given times, at rest at both ends (the settings
 #: give the limits, e.g. the quintic's cruise speed). ``examples/custom_trajectory.py``
@@ -143,7 +141,7 @@ class TrajectorySettings:
         return dataclasses.replace(self, **changes)
 
 
-def _generator(settings: TrajectorySettings, free_world: World | None) -> Generator:
+def _generator(settings: TrajectorySettings, free_world: World | None) -> Build:
     if not settings.corridor:
         method = METHODS.get(settings.method)
         return lambda waypoints, times: method(waypoints, times, settings)
@@ -243,7 +241,7 @@ def _piece(points: FloatArray, settings: TrajectorySettings, free_world: World |
     return trajectory.replace(info={**trajectory.info, "time_stretch": stretch})
 
 
-def _segment_times(points: FloatArray, settings: TrajectorySettings, build: Generator,
+def _segment_times(points: FloatArray, settings: TrajectorySettings, build: Build,
                    fastest: bool) -> FloatArray:
     """Segment times (N - 1,), s, for ``points`` (N, 3) by the timing of ``settings``
     (``fastest`` says whether that is the near time-optimal one)."""

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from quadnav.batch.fly_one import BatchContext, load_context, mission_problem, mission_settings
-from quadnav.batch.grid import BatchSpec, MissionSpec, parse_spec
+from quadnav.batch.grid import BatchSpec, MissionSpec, spec_from_table
 from quadnav.batch.stages import StageCache
 from quadnav.config import read_toml
 from quadnav.control.gains import Gains
@@ -120,7 +120,7 @@ def _parse(table: dict[str, Any], folder: Path, name: str, vehicle: str) -> Tune
     if not specs and "maps" not in table:
         raise QuadnavError(f"{name}: expected references, maps or both")
     grid = {"maps": ["empty"], "speeds": [1.0], "seeds": [0]} | table | {"vehicle": vehicle}
-    spec = parse_spec(grid, folder, name)
+    spec = spec_from_table(grid, folder, name)
     references = tuple((_reference(s, folder, name), s) for s in specs)
     return TuneSet(name, references, spec.flight_seeds, spec.winds, spec.gusts,
                    spec if "maps" in table else None)

@@ -28,6 +28,7 @@ import numpy as np
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import MapError, MapWarning
+from quadnav.limits import format_number, is_number
 from quadnav.world.blockrows import BlockRows, order_rows
 from quadnav.world.jsonblocks import BlockTable
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
@@ -40,7 +41,6 @@ from quadnav.world.reading import (
     check_margin,
     read_box,
 )
-from quadnav.world.textmap import format_number
 
 
 class _LocatedDict(dict):
@@ -126,20 +126,16 @@ def _line(obj: Any) -> int | None:
     return getattr(obj, "line", None)
 
 
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def _number(value: Any, source: str, line: int | None, what: str) -> float:
     """``value`` as a finite float, or a MapError."""
-    if not _is_number(value):
+    if not is_number(value):
         raise MapError(source, f"{what}: expected a number, got {json.dumps(value)[:60]}", line)
     return check_finite(float(value), source, line, what, getattr(value, "text", None))
 
 
 def _numbers(value: Any, count: int, source: str, line: int | None, what: str) -> list[float]:
     """``value`` as a list of ``count`` finite numbers, or a MapError."""
-    if not isinstance(value, list) or len(value) != count or not all(map(_is_number, value)):
+    if not isinstance(value, list) or len(value) != count or not all(map(is_number, value)):
         raise MapError(source, f"{what}: expected a list of {count} numbers, got "
                        f"{json.dumps(value)[:60]}", line)
     return [_number(v, source, line, what) for v in value]
@@ -311,7 +307,7 @@ def _plain_blocks(raw_blocks: list[Any], start: int, table: BlockTable, source: 
 
 
 def _json_list(values: Any) -> str:
-    return "[" + ", ".join(format_number(float(v)) for v in values) + "]"
+    return "[" + ", ".join(format_number(float(v), grouped=False) for v in values) + "]"
 
 
 def _interleaved(box: Any) -> str:
@@ -331,6 +327,6 @@ def format_json_map(world: World) -> str:
             out.append(f'    "{key}": {_json_list(value)}')
     if world.margin is not None:
         out[-1] += ","
-        out.append(f'    "margin": {format_number(world.margin)}')
+        out.append(f'    "margin": {format_number(world.margin, grouped=False)}')
     out.append("}")
     return "\n".join(out) + "\n"

@@ -15,10 +15,12 @@ a colour (ignored), blocks without a colour, overlapping blocks, a min above its
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from quadnav.errors import MapError
-from quadnav.limits import MAX_BLOCKS
+from quadnav.limits import MAX_BLOCKS, format_number
 from quadnav.world.blockrows import BlockRows, order_rows
 from quadnav.world.model import DEFAULT_BLOCK_COLOR, World
 from quadnav.world.reading import (
@@ -123,29 +125,24 @@ class _TextMapReader:
         return assemble_world(self.source, self.boundary, *self.blocks.arrays())
 
 
-def format_number(value: float) -> str:
-    """The shortest text that reads back as exactly ``value`` (``3`` rather than ``3.0``)."""
-    if value.is_integer() and abs(value) < 1e15:
-        return str(int(value))
-    return repr(value)
-
-
 def format_text_map(world: World) -> str:
     """The world as a text map; reading it back gives the same numbers.
 
     The text format has no place for a start, goal or margin: they are written as
     comments, for a reader's eyes only.
     """
+    def numbers(values: Any) -> list[str]:
+        return [format_number(float(v), grouped=False) for v in values]
+
     out = [f"# {world.name}", "# boundary xmin ymin zmin xmax ymax zmax",
            "# block xmin ymin zmin xmax ymax zmax r g b (colour 0-255)"]
     for key in ("start", "goal"):
         value = getattr(world, key)
         if value is not None:
-            out.append(f"# {key}: ({', '.join(format_number(float(v)) for v in value)})")
+            out.append(f"# {key}: ({', '.join(numbers(value))})")
     if world.margin is not None:
-        out.append(f"# margin: {format_number(world.margin)}")
-    out.append("boundary " + " ".join(format_number(float(v)) for v in world.boundary))
+        out.append(f"# margin: {numbers([world.margin])[0]}")
+    out.append("boundary " + " ".join(numbers(world.boundary)))
     for box, color in zip(world.blocks, world.colors, strict=True):
-        numbers = [*box, *(color * 255)]
-        out.append("block " + " ".join(format_number(float(v)) for v in numbers))
+        out.append("block " + " ".join(numbers([*box, *(color * 255)])))
     return "\n".join(out) + "\n"

@@ -26,7 +26,7 @@ from quadnav.errors import QuadnavError
 from quadnav.trajectory.model import Trajectory, ppoly_from_ascending
 
 #: Trajectory method names by the order ``r`` of the minimised derivative.
-METHODS = {3: "minjerk", 4: "minsnap"}
+METHOD_BY_ORDER = {3: "minjerk", 4: "minsnap"}
 
 
 def check_waypoints_and_times(waypoints: ArrayLike, times: ArrayLike
@@ -131,8 +131,8 @@ def equality_constraints(waypoints: FloatArray, times: FloatArray, r: int, conti
     return A, b
 
 
-def make_trajectory(coefficients: FloatArray, waypoints: FloatArray, times: FloatArray,
-                    method: str, info: dict) -> Trajectory:
+def trajectory_from_tau(coefficients: FloatArray, waypoints: FloatArray, times: FloatArray,
+                        method: str, info: dict) -> Trajectory:
     """A :class:`Trajectory` from tau-coefficients (segments, 2r, 3): each ``c_k`` becomes
     the local-time coefficient ``c_k / T_i^k``."""
     powers = times[:, None] ** -np.arange(coefficients.shape[1])

@@ -22,9 +22,9 @@ from scipy.sparse.linalg import splu
 from quadnav.errors import QuadnavError
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polynomials import basis
-from quadnav.trajectory.polynomials.basis import METHODS
+from quadnav.trajectory.polynomials.basis import METHOD_BY_ORDER
 
-__all__ = ["METHODS", "minimum_derivative", "minimum_snap", "snap_cost"]
+__all__ = ["METHOD_BY_ORDER", "minimum_derivative", "minimum_snap", "snap_cost"]
 
 
 def minimum_derivative(waypoints: ArrayLike, times: ArrayLike, derivative: int = 4
@@ -48,8 +48,8 @@ def minimum_derivative(waypoints: ArrayLike, times: ArrayLike, derivative: int =
         QuadnavError: fewer than 2 waypoints, times not one positive duration per segment,
             non-finite values, or an unsupported ``derivative``.
     """
-    if derivative not in METHODS:
-        raise QuadnavError(f"derivative must be one of {sorted(METHODS)} "
+    if derivative not in METHOD_BY_ORDER:
+        raise QuadnavError(f"derivative must be one of {sorted(METHOD_BY_ORDER)} "
                            f"(jerk, snap), got {derivative}")
     points, durations = basis.check_waypoints_and_times(waypoints, times)
     r = derivative
@@ -61,7 +61,7 @@ def minimum_derivative(waypoints: ArrayLike, times: ArrayLike, derivative: int =
     coefficients = solution[:Q.shape[0]].reshape(len(durations), 2 * r, 3)
     info = {"cost": basis.trajectory_cost(coefficients, durations, r),
             "solver": "scipy.sparse.linalg.splu (KKT)", "continuity": r}
-    return basis.make_trajectory(coefficients, points, durations, METHODS[r], info)
+    return basis.trajectory_from_tau(coefficients, points, durations, METHOD_BY_ORDER[r], info)
 
 
 def minimum_snap(waypoints: ArrayLike, times: ArrayLike) -> Trajectory:

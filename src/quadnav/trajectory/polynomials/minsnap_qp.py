@@ -34,7 +34,7 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polynomials import basis
-from quadnav.trajectory.polynomials.basis import METHODS
+from quadnav.trajectory.polynomials.basis import METHOD_BY_ORDER
 
 #: Order of the minimised derivative (snap).
 SNAP = 4
@@ -191,4 +191,5 @@ def minimum_snap_qp(waypoints: ArrayLike, times: ArrayLike, *,
             "solver": "clarabel", "status": ", ".join(sorted(set(statuses))),
             "iterations": iterations,
             "solve_time": seconds, "continuity": SNAP, "inequalities": int(G.shape[0])}
-    return basis.make_trajectory(coefficients, points, durations, METHODS[SNAP], info)
+    return basis.trajectory_from_tau(coefficients, points, durations, METHOD_BY_ORDER[SNAP],
+                                     info)

@@ -32,7 +32,7 @@ from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.polynomials.basis import (
     check_waypoints_and_times,
     derivative_rows,
-    make_trajectory,
+    trajectory_from_tau,
 )
 from quadnav.trajectory.polynomials.minsnap import minimum_derivative
 from quadnav.trajectory.timing.segment_times import segment_lengths
@@ -54,7 +54,7 @@ def hermite_trajectory(states: FloatArray, durations: FloatArray, method: str, i
     ends = np.concatenate([states[:-1] * powers[:, :, None], states[1:] * powers[:, :, None]],
                           axis=1)  # (segments, 6, 3)
     coefficients = np.einsum("kj,sja->ska", _HERMITE, ends)
-    return make_trajectory(coefficients, states[:, 0], durations, method, info)
+    return trajectory_from_tau(coefficients, states[:, 0], durations, method, info)
 
 
 def quintic_segments(waypoints: ArrayLike, times: ArrayLike, cruise_speed: float) -> Trajectory:

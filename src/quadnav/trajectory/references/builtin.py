@@ -31,7 +31,16 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_DURATION, SPEED, Range
-from quadnav.specs import AXIS, FLOAT, INT, Param, SpecError, SpecInfo, describe_params, parse_spec
+from quadnav.specs import (
+    AXIS,
+    FLOAT,
+    INT,
+    Param,
+    SpecError,
+    SpecInfo,
+    canonical_spec,
+    describe_params,
+)
 from quadnav.trajectory.references.contract import Reference, Sampling
 from quadnav.trajectory.references.plain import (
     flat_reference,
@@ -366,7 +375,7 @@ def build_reference(spec: str) -> Reference:
         raise QuadnavError(f"{spec}: unknown built-in reference {name!r} "
                            f"(known: {', '.join(_TYPES)})")
     try:
-        canonical, values = parse_spec(name, kind.params, rest if colon else None)
+        canonical, values = canonical_spec(name, kind.params, rest if colon else None)
         return kind.make(canonical, values)
     except SpecError as error:
         raise QuadnavError(f"{spec}: {error}") from None

@@ -23,8 +23,8 @@ from quadnav.specs import (
     ParamInfo,
     SpecError,
     SpecInfo,
+    canonical_spec,
     describe_params,
-    parse_spec,
 )
 from quadnav.world.builtin import empty, forest, maze, window
 from quadnav.world.builtin.base import Generator, Layout
@@ -85,7 +85,7 @@ def build_world(spec: str) -> World:
         raise MapError(spec, f"unknown built-in world {name!r} "
                        f"(known: {', '.join(_GENERATORS)})")
     try:
-        canonical, values = parse_spec(name, generator.params, rest if colon else None)
+        canonical, values = canonical_spec(name, generator.params, rest if colon else None)
         seed = values.get("seed", 0)
         for attempt in range(MAX_ATTEMPTS):
             layout = generator.layout(values, np.random.default_rng([seed, attempt]))
