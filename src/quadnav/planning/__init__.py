@@ -13,9 +13,10 @@ import time
 
 import numpy as np
 
+from quadnav.planning.contract import Progress
 from quadnav.planning.plain import PlainPlanner
 from quadnav.planning.problem import PlanningProblem, make_problem
-from quadnav.planning.registry import Progress, get_planner, planner_names, register_planner
+from quadnav.planning.registry import get_planner, planner_names, register_planner
 from quadnav.planning.result import PlanResult, PlanStats, PostStep, path_length
 from quadnav.planning.settings import PlannerSettings
 from quadnav.planning.stall import StallRule

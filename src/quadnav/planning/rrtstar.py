@@ -20,9 +20,9 @@ import time
 import numpy as np
 
 from quadnav.limits import PLAN_ITERATIONS
+from quadnav.planning.contract import Progress
 from quadnav.planning.nodegrid import new_node_grid, rebuild
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.registry import Progress
 from quadnav.planning.result import PlanResult, PlanStats, no_path_message
 from quadnav.planning.rrtstar_kernel import (
     BEST_COST,
