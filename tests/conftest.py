@@ -135,9 +135,12 @@ def registrations_forgotten():
     from quadnav.planning.registry import PLANNERS
     from quadnav.sim.wind import WINDS
     from quadnav.trajectory import METHODS
+    from quadnav.trajectory.references.builtin import REFERENCES
+    from quadnav.vehicle.params import PRESETS
+    from quadnav.world.builtin import WORLDS
 
     registries = [(registry, set(registry.names())) for registry in
-                  (PLANNERS, METHODS, CONTROLLERS, WINDS)]
+                  (PLANNERS, METHODS, REFERENCES, CONTROLLERS, WINDS, WORLDS, PRESETS)]
     yield
     for registry, names in registries:
         for name in set(registry.names()) - names:

@@ -17,7 +17,10 @@ from quadnav.planning import make_problem, plan, planner_names, register_planner
 from quadnav.plugins import Lazy, OptionalWheel, PluginError, Registry
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
 from quadnav.trajectory.polynomials.minsnap import minimum_derivative
+from quadnav.trajectory.references.builtin import REFERENCES, load_reference
+from quadnav.vehicle.params import PRESETS, load_params, preset_names
 from quadnav.world import load_world
+from quadnav.world.builtin import WORLDS, build_world, empty
 
 
 def test_a_registered_planner_is_planned_with_by_name(registrations_forgotten):
@@ -122,6 +125,18 @@ def test_a_broken_installed_plugin_does_not_stop_the_command_line(tmp_path):
     assert result.stderr.splitlines()[-1] == f"quadnav: error: {BROKEN_LINE}"
 
 
+def test_a_broken_installed_controller_leaves_the_built_in_ones_flying(tmp_path):
+    """Every flight asks which gain sets exist: only the built-in controllers are asked."""
+    install_package(tmp_path, "broken_plugin", BROKEN_PACKAGE,
+                    "[quadnav.controllers]\nmine = broken_plugin:Mine\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "quadnav", "track", "hover:duration=1", "--no-figures",
+         "--quiet", "-o", str(tmp_path / "out")],
+        env={**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])},
+        capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+
+
 def test_a_lazy_entry_is_imported_when_first_asked_for_and_a_missing_wheel_is_one_line():
     registry = Registry("thing", "quadnav.no_such_group", {
         "sqrt": "math:sqrt",
@@ -145,6 +160,21 @@ def test_a_name_registered_is_forgotten_by_unregister():
     with pytest.raises(QuadnavError, match=r"^unknown thing 'b'; expected one of a, or "
                                            r"module:NAME or file.py:NAME$"):
         registry.unregister("b")
+
+
+def test_worlds_references_and_vehicle_presets_register_as_planners_do(
+        registrations_forgotten):
+    WORLDS.register("void", empty.GENERATOR)
+    assert build_world("void:size=5x5x2").name == "void:size=5x5x2"
+    REFERENCES.register("still", REFERENCES.get("hover"))
+    assert load_reference("still:height=2").position(0.0).tolist() == [0.0, 0.0, 2.0]
+    PRESETS.register("heavy", lambda: load_params("tello").replace(name="heavy", mass=0.1))
+    assert load_params("heavy").mass == 0.1 and "heavy" in preset_names()
+    assert load_params("heavy") is not load_params("heavy")  # a new one each time
+    with pytest.raises(QuadnavError, match=r"^world 'box': expected a Generator, got 3$"):
+        WORLDS.register("box", 3)
+    with pytest.raises(QuadnavError, match=r"^reference 'box': expected a ReferenceType"):
+        REFERENCES.register("box", empty.GENERATOR)
 
 
 def test_a_registry_loads_entry_points_once_and_keeps_builtins_first():
