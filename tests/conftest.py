@@ -131,12 +131,12 @@ def course(shared_maps):
 def registrations_forgotten():
     """The names registered during the test (by it or by an example it runs) in every
     registry of plug-ins are forgotten after it."""
-    from quadnav.control.registry import CONTROLLERS
+    from quadnav.control import CONTROLLERS
     from quadnav.planning.registry import PLANNERS
     from quadnav.sim.wind import WINDS
     from quadnav.trajectory import METHODS
     from quadnav.trajectory.references.builtin import REFERENCES
-    from quadnav.vehicle.params import PRESETS
+    from quadnav.vehicle import PRESETS
     from quadnav.world.builtin import WORLDS
 
     registries = [(registry, set(registry.names())) for registry in

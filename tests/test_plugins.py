@@ -18,7 +18,7 @@ from quadnav.plugins import Lazy, OptionalWheel, PluginError, Registry
 from quadnav.trajectory.generate import METHODS, TrajectorySettings, make_trajectory
 from quadnav.trajectory.polynomials.minsnap import minimum_derivative
 from quadnav.trajectory.references.builtin import REFERENCES, load_reference
-from quadnav.vehicle.params import PRESETS, load_params, preset_names
+from quadnav.vehicle import PRESETS, load_params, preset_names
 from quadnav.world import load_world
 from quadnav.world.builtin import WORLDS, build_world, empty
 
