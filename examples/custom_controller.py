@@ -17,9 +17,15 @@ import sys
 import numpy as np
 from numba import njit
 
-from quadnav.control.contract import SATURATED, Controller
-from quadnav.control.registry import CONTROLLERS
-from quadnav.control.se3 import SE3GainArrays, SE3Gains, se3_gain_arrays, se3_step
+from quadnav.control import (
+    SATURATED,
+    Controller,
+    SE3GainArrays,
+    SE3Gains,
+    register_controller,
+    se3_gain_arrays,
+    se3_step,
+)
 from quadnav.mission import MissionSettings, fly_mission
 from quadnav.sim.settings import SimSettings
 from quadnav.world import load_world
@@ -53,7 +59,7 @@ def se3_integral(vehicle, gains=None) -> Controller:
     return Controller("se3i", se3_integral_step, gains, 4)
 
 
-CONTROLLERS.register("se3i", se3_integral)
+register_controller("se3i", se3_integral)
 
 if __name__ == "__main__":
     name = sys.argv[1] if len(sys.argv) > 1 else "forest"

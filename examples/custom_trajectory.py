@@ -14,7 +14,7 @@ Run: python examples/custom_trajectory.py [MAP]   (default: the built-in forest)
 import sys
 
 from quadnav.mission import MissionSettings, fly_mission
-from quadnav.trajectory.generate import METHODS, TrajectorySettings
+from quadnav.trajectory import METHODS, TrajectorySettings
 from quadnav.trajectory.polynomials.minsnap import minimum_derivative
 from quadnav.world import load_world
 

@@ -127,6 +127,26 @@ def course(shared_maps):
     return planned_course(shared_maps)
 
 
+@pytest.fixture
+def registrations_forgotten():
+    """The names registered during the test (by it or by an example it runs) in every
+    registry of plug-ins are forgotten after it."""
+    from quadnav.control import CONTROLLERS
+    from quadnav.planning.registry import PLANNERS
+    from quadnav.sim.wind import WINDS
+    from quadnav.trajectory import METHODS
+    from quadnav.trajectory.references.builtin import REFERENCES
+    from quadnav.vehicle import PRESETS
+    from quadnav.world.builtin import WORLDS
+
+    registries = [(registry, set(registry.names())) for registry in
+                  (PLANNERS, METHODS, REFERENCES, CONTROLLERS, WINDS, WORLDS, PRESETS)]
+    yield
+    for registry, names in registries:
+        for name in set(registry.names()) - names:
+            registry.unregister(name)
+
+
 @pytest.fixture(autouse=True)
 def _close_figures():
     """Close the figures a test drew (pyplot keeps every open figure)."""

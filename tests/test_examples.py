@@ -8,33 +8,15 @@ import runpy
 import shutil
 import subprocess
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
-from quadnav.control.registry import CONTROLLERS
-from quadnav.planning.registry import PLANNERS
-from quadnav.trajectory.generate import METHODS
-
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-@contextmanager
-def registrations_forgotten() -> Iterator[None]:
-    """The names registered within the block (by an example) are forgotten after it."""
-    registries = [(registry, dict(registry._all())) for registry in (PLANNERS, METHODS,
-                                                                   CONTROLLERS)]
-    try:
-        yield
-    finally:
-        for registry, plugins in registries:
-            registry._plugins = plugins
-
-
 @pytest.fixture
-def run_example(capsys, monkeypatch):
+def run_example(capsys, monkeypatch, registrations_forgotten):
     """``run(name, *args) -> stdout`` of ``python examples/name args``, in this process;
     the names an example registers are forgotten afterwards."""
 
@@ -43,8 +25,7 @@ def run_example(capsys, monkeypatch):
         runpy.run_path(str(EXAMPLES / name), run_name="__main__")
         return capsys.readouterr().out
 
-    with registrations_forgotten():
-        yield run
+    return run
 
 
 def test_every_example_is_tested():

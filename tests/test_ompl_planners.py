@@ -11,8 +11,8 @@ pytest.importorskip("ompl", reason="the optional OMPL wheel is not installed (pi
 
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.planning import PlannerSettings, make_problem, path_length, plan
+from quadnav.planning.contract import OMPL_PLANNERS
 from quadnav.planning.ompl_planners import plan_ompl, simplify_ompl
-from quadnav.planning.registry import OMPL_PLANNERS
 from quadnav.world import World, load_world
 
 OPTIMIZING = ("RRTstar", "InformedRRTstar", "BITstar", "PRMstar")

@@ -188,7 +188,7 @@ def test_a_controller_registered_by_name_or_declared_by_a_package_flies(controll
     try:
         tracking = track_reference(load_reference("hover"), TELLO, controller="velocity_test")
     finally:
-        del CONTROLLERS._plugins["velocity_test"]
+        CONTROLLERS.unregister("velocity_test")
     assert tracking.success and tracking.parameters()["controller"] == "velocity_test"
     info = tmp_path / "my_controllers-0.1.dist-info"
     info.mkdir()

@@ -128,5 +128,5 @@ def test_a_registered_wind_is_known_by_its_name(winds):
     try:
         wind = load_wind("steady_test(velocity=[0, 0, 1])")
     finally:
-        del WINDS._plugins["steady_test"]
+        WINDS.unregister("steady_test")
     assert wind.at(0.0, np.zeros(3)).tolist() == [0.0, 0.0, 1.0]

@@ -1,9 +1,15 @@
-"""Plug-in points by name: a :class:`Registry` of functions that a user registers in their
-own process (:meth:`Registry.register`) or that an installed package declares as entry
-points, so the ``quadnav`` command and batch workers know them too::
+"""Plug-in points by name: a :class:`Registry` each of planners, trajectory methods,
+references, controllers, winds, built-in worlds and vehicle presets, which a user adds to
+in their own process (:meth:`Registry.register`, :meth:`Registry.unregister`) or which an
+installed package declares as entry points, so the ``quadnav`` command and batch workers
+know them too::
 
     [project.entry-points."quadnav.planners"]
     mine = "my_package.my_module:plan_mine"
+
+Listing a registry imports nothing: a built-in given as a :class:`Lazy` (OMPL's planners,
+which need an optional wheel) and an entry point are imported when first asked for, and an
+entry point that cannot be imported names itself in one line then, leaving the others be.
 
 A plug-in may also be named where it is, without registering it (:func:`parse_spec`,
 :meth:`Registry.load`): ``module.path:Name`` (an importable module) or ``path/to/file.py:Name``
@@ -24,7 +30,7 @@ import sys
 import traceback
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from pathlib import Path
 from types import MappingProxyType, ModuleType
 from typing import Any, Generic, TypeVar
@@ -34,76 +40,169 @@ import numpy as np
 from quadnav.errors import QuadnavError
 from quadnav.inputfiles import special_file
 
-Plugin = TypeVar("Plugin", bound=Callable)
+Plugin = TypeVar("Plugin")
 #: quadnav's own folder: frames in it are left out of a plug-in's traceback.
 _PACKAGE = Path(__file__).resolve().parent
 
 
-class Registry(Generic[Plugin]):
-    """Functions by name: the built-in ones, then those registered here, then those of
-    installed packages' entry points in ``group`` (loaded once, on first use).
+@dataclass(frozen=True)
+class OptionalWheel:
+    """An optional package a built-in plug-in needs, installed by one of quadnav's extras.
 
-    Args:
-        kind: what the functions are, for messages ("planner").
-        group: the entry-point group ("quadnav.planners").
-        builtins: the built-in functions by name, in the order they are listed.
+    Attributes:
+        module: the name it is imported by ("ompl").
+        label: what messages call it ("OMPL").
+        extra: the quadnav extra that installs it ("ompl").
     """
 
-    def __init__(self, kind: str, group: str, builtins: dict[str, Plugin]) -> None:
+    module: str
+    label: str
+    extra: str
+
+    def missing(self) -> bool:
+        """Whether it is not installed."""
+        return importlib.util.find_spec(self.module) is None
+
+
+@dataclass(frozen=True)
+class Lazy:
+    """A built-in plug-in imported on first use: the object ``target`` (``module:name``)
+    names, or, given ``args``, what that object returns when called with them.
+
+    Attributes:
+        target: ``module.path:Name``.
+        args: the arguments of a factory; none: the target is the plug-in itself.
+        needs: the optional package it needs, checked before it is imported.
+    """
+
+    target: str
+    args: tuple[Any, ...] = ()
+    needs: OptionalWheel | None = None
+
+
+class Registry(Generic[Plugin]):
+    """Plug-ins by name: the built-in ones, then those of installed packages' entry points in
+    ``group``, then those registered here. Listing the names imports nothing; an entry
+    given as a :class:`Lazy` (or its ``module:name`` text) or by an entry point is
+    imported the first time it is asked for, and one that cannot be imported says so in one
+    line (:class:`PluginError`) without disturbing the others.
+
+    Args:
+        kind: what the plug-ins are, for messages ("planner").
+        group: the entry-point group ("quadnav.planners").
+        builtins: the built-in plug-ins by name, in the order they are listed: each the
+            plug-in itself, or a :class:`Lazy` or ``module:name`` text naming it.
+        located: how a plug-in named where it is is written, for messages.
+        expects: the type of every registered plug-in; None: any function or class.
+    """
+
+    def __init__(self, kind: str, group: str, builtins: Mapping[str, Plugin | Lazy | str],
+                 located: str = "module:NAME or file.py:NAME",
+                 expects: type | None = None) -> None:
         self.kind = kind
         self.group = group
-        self._plugins = dict(builtins)
-        self._loaded = False
+        self.located = located
+        self.expects = expects
+        self._entries: dict[str, Plugin | Lazy | EntryPoint] = {
+            name: Lazy(entry) if isinstance(entry, str) else entry
+            for name, entry in builtins.items()}
+        self._found_entry_points = False
 
-    def _all(self) -> dict[str, Plugin]:
-        if not self._loaded:
-            self._loaded = True
+    def _names(self) -> dict[str, Plugin | Lazy | EntryPoint]:
+        """Every entry by name; the entry points of installed packages are found (not
+        loaded) the first time."""
+        if not self._found_entry_points:
+            self._found_entry_points = True
             for point in entry_points(group=self.group):
-                self._plugins.setdefault(point.name, point.load())
-        return self._plugins
+                self._entries.setdefault(point.name, point)
+        return self._entries
 
     def register(self, name: str, plugin: Plugin, replace: bool = False) -> None:
         """Make ``plugin`` known as ``name`` in this process. QuadnavError for a name that
-        is empty or holds a space or a colon, for something not callable, or for a name
-        taken (unless ``replace``)."""
+        is empty or holds a space or a colon, for something not callable (or not of the
+        type the registry :attr:`expects`), or for a name taken (unless ``replace``)."""
         if not name or any(c.isspace() or c == ":" for c in name):
             raise QuadnavError(f"{self.kind} name {name!r}: expected a word without spaces "
                                "or colons")
-        if not callable(plugin):
+        if self.expects is None and not callable(plugin):
             raise QuadnavError(f"{self.kind} {name!r}: expected a function, got {plugin!r}")
-        if name in self._all() and not replace:
+        if self.expects is not None and not isinstance(plugin, self.expects):
+            raise QuadnavError(f"{self.kind} {name!r}: expected a {self.expects.__name__}, "
+                               f"got {plugin!r}")
+        if name in self._names() and not replace:
             raise QuadnavError(f"{self.kind} {name!r} is already registered")
-        self._plugins[name] = plugin
+        self._entries[name] = plugin
+
+    def unregister(self, name: str) -> None:
+        """Forget the plug-in ``name`` in this process; QuadnavError if there is none."""
+        if name not in self._names():
+            raise self.unknown(name)
+        del self._entries[name]
 
     def names(self) -> list[str]:
         """Every name known, the built-in ones first."""
-        return list(self._all())
+        return list(self._names())
 
     def __contains__(self, name: object) -> bool:
-        return name in self._all()
+        return name in self._names()
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names())
 
     def get(self, name: str) -> Plugin:
-        """The function called ``name``; QuadnavError naming the choices if there is none."""
-        if name not in self._all():
+        """The plug-in called ``name``, imported if it was not yet. QuadnavError naming the
+        choices if there is none; :class:`PluginError` naming it when it cannot be
+        imported (an optional package missing, an installed package's entry point that
+        raised)."""
+        if name not in self._names():
             raise QuadnavError(f"unknown {self.kind} {name!r}; expected one of "
                                f"{', '.join(self.names())}")
-        return self._plugins[name]
+        entry = self._entries[name]
+        if isinstance(entry, Lazy):
+            entry = self._entries[name] = self._load_lazy(name, entry)
+        elif isinstance(entry, EntryPoint):
+            entry = self._entries[name] = self._load_entry_point(name, entry)
+        return entry
+
+    def _load_lazy(self, name: str, lazy: Lazy) -> Plugin:
+        if lazy.needs is not None and lazy.needs.missing():
+            raise PluginError(f"{self.kind} {name!r} needs the optional {lazy.needs.label} "
+                              f"wheel: python -m pip install 'quadnav[{lazy.needs.extra}]'")
+        found = load_target(lazy.target, self.kind)
+        return found(*lazy.args) if lazy.args else found
+
+    def _load_entry_point(self, name: str, point: EntryPoint) -> Plugin:
+        try:
+            return point.load()
+        except Exception as error:
+            raise PluginError(f"{self.kind} {name!r} from package entry point {point.value} "
+                              f"could not be loaded: {type(error).__name__}: {error}",
+                              details=user_traceback(error)) from None
+
+    def is_located(self, text: str) -> bool:
+        """Whether ``text`` says where its plug-in is (``where:Name``, :func:`parse_spec`)
+        rather than naming an entry: a name before the colon that built-in entries use as
+        their prefix (``ompl:`` of ``ompl:RRTstar``) is not a place."""
+        spec = parse_spec(text, self.kind)
+        prefixes = {name.partition(":")[0] for name in self._entries if ":" in name}
+        return spec.is_located and spec.target.partition(":")[0] not in prefixes
+
+    def unknown(self, text: str) -> QuadnavError:
+        """The error for ``text``, which names no entry: the names known, and how a plug-in
+        named where it is is written."""
+        names = f"one of {', '.join(self.names())}, or " if self.names() else ""
+        return QuadnavError(f"unknown {self.kind} {text!r}; expected {names}{self.located}")
 
     def load(self, text: str) -> tuple[Any, Mapping[str, Any]]:
         """What ``text`` names (a registered name, ``module:Name`` or ``file.py:Name``, see
         :func:`parse_spec`) and the keyword arguments it gives. QuadnavError (a
         :class:`PluginError` for the user's own code) when it cannot be found or loaded."""
         spec = parse_spec(text, self.kind)
-        if spec.is_located:
+        if spec.target in self:
+            return self.get(spec.target), spec.kwargs
+        if self.is_located(text):
             return load_target(spec.target, self.kind), spec.kwargs
-        if spec.target not in self:
-            names = f"one of {', '.join(self.names())}, or " if self.names() else ""
-            raise QuadnavError(f"unknown {self.kind} {spec.target!r}; expected {names}"
-                               "module:NAME or file.py:NAME")
-        return self.get(spec.target), spec.kwargs
+        raise self.unknown(spec.target)
 
 
 class PluginError(QuadnavError):

@@ -94,23 +94,29 @@ class GainedController:
 #: attitude, rate and velocity commands fly through (:mod:`quadnav.control.held`), whose
 #: gains are therefore that controller's gains.
 INNER_LOOPS = GainedController(cascade_controller, Gains, CASCADE_SETS)
-#: Every controller by name, the default first.
-CONTROLLERS: Registry[ControllerFactory] = Registry("controller", "quadnav.controllers", {
-    "cascade": INNER_LOOPS,
-    "se3": GainedController(se3_controller, SE3Gains, "presets/se3"),
-})
+#: The built-in controllers by name, the default first.
+_OURS = {"cascade": INNER_LOOPS,
+         "se3": GainedController(se3_controller, SE3Gains, "presets/se3")}
+#: Every controller by name: ours, those of installed packages' entry points, those
+#: registered.
+CONTROLLERS: Registry[ControllerFactory] = Registry("controller", "quadnav.controllers", _OURS)
 #: The controller used when none is named.
 DEFAULT_CONTROLLER = "cascade"
+
+
+def register_controller(name: str, factory: ControllerFactory, replace: bool = False) -> None:
+    """Make ``factory`` (a compiled controller's factory or a plain-Python controller's
+    class) known as ``name`` in this process, wherever a controller is chosen by name (see
+    :meth:`quadnav.plugins.Registry.register`)."""
+    CONTROLLERS.register(name, factory, replace)
 
 
 def gain_set_names() -> list[str]:
     """Every gain set a vehicle may name: ``tello`` (every controller's defaults) and each
     set a built-in controller ships."""
     names = {DEFAULT_GAIN_SET}
-    for name in CONTROLLERS:
-        factory = CONTROLLERS.get(name)
-        if isinstance(factory, GainedController):
-            names.update(toml_names(factory.sets))
+    for factory in _OURS.values():
+        names.update(toml_names(factory.sets))
     return sorted(names)
 
 

@@ -1,7 +1,8 @@
 """OMPL's geometric planners behind quadnav's planner interface (the optional ``ompl`` wheel).
 
 :func:`plan_ompl` runs OMPL 2's RRT*, Informed RRT*, BIT*, RRT-Connect or PRM* on a
-:class:`~quadnav.planning.problem.PlanningProblem`; :func:`simplify_ompl` runs OMPL's path
+:class:`~quadnav.planning.problem.PlanningProblem` (:func:`ompl_planner`: one of them as a
+planner, the registry's ``ompl:NAME``); :func:`simplify_ompl` runs OMPL's path
 simplifier on a path. Both check states and motions *exactly*, with quadnav's numba kernels
 (:func:`~quadnav.world.blockgrid.grid_point_free`,
 :func:`~quadnav.world.blockgrid.grid_segment_free`, the same our RRT* uses)
@@ -66,8 +67,8 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
+from quadnav.planning.contract import OMPL_PLANNERS, OMPL_PREFIX, Planner, Progress
 from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.registry import OMPL_PLANNERS, OMPL_PREFIX, Progress
 from quadnav.planning.result import (
     IntArray,
     PlanResult,
@@ -370,6 +371,17 @@ def plan_ompl(problem: PlanningProblem, settings: PlannerSettings, name: str,
         message="" if search_path is not None else no_path_message(
             stats, settings.max_iterations, settings.time_limit),
     )
+
+
+def ompl_planner(name: str) -> Planner:
+    """OMPL's planner ``name`` (one of :data:`~quadnav.planning.contract.OMPL_PLANNERS`) as
+    a :data:`~quadnav.planning.contract.Planner`: what the registry's ``ompl:NAME`` is."""
+
+    def planner(problem: PlanningProblem, settings: PlannerSettings,
+                progress: Progress | None) -> PlanResult:
+        return plan_ompl(problem, settings, name, progress)
+
+    return planner
 
 
 def simplify_ompl(problem: PlanningProblem, path: ArrayLike, time_limit: float = 1.0,

@@ -50,7 +50,7 @@ ARGUMENTS = ("world", "start", "goal", "margin")
 
 @dataclass(frozen=True, eq=False)
 class PlainPlanner:
-    """A plain function as a :data:`~quadnav.planning.registry.Planner`
+    """A plain function as a :data:`~quadnav.planning.contract.Planner`
     (``(problem, settings, progress) -> PlanResult``; see the module docstring).
 
     Attributes:

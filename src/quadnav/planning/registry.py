@@ -3,8 +3,8 @@ planner registered by :func:`register_planner` or by a package's entry point, an
 function named where it is, ``module:function`` or ``path/to/file.py:function``
 (:mod:`quadnav.planning.plain`: ``function(world, start, goal, margin) -> path (N, 3)``).
 
-Every planner is a function with the :data:`Planner` signature. It searches
-``problem.free_world`` (the map with its blocks grown by the margin) from
+Every planner is a function with the :data:`~quadnav.planning.contract.Planner` signature.
+It searches ``problem.free_world`` (the map with its blocks grown by the margin) from
 ``problem.search_start`` to ``problem.search_goal`` and returns a
 :class:`~quadnav.planning.result.PlanResult` whose path runs from exactly
 ``problem.start`` to exactly ``problem.goal`` (:meth:`PlanningProblem.full_path` adds
@@ -17,38 +17,29 @@ batch workers too, a package declares it as an entry point in its ``pyproject.to
 
     [project.entry-points."quadnav.planners"]
     mine = "my_package.my_module:plan_mine"
+
+Only the planner asked for is imported: OMPL's when one of them is (it checks for the
+wheel first), an entry point's when it is (one that cannot be imported names itself, and
+the others still fly).
 """
 
 from __future__ import annotations
 
-import importlib.util
-from collections.abc import Callable
-
-from quadnav.errors import QuadnavError
+from quadnav.planning.contract import OMPL_PLANNERS, OMPL_PREFIX, Planner
 from quadnav.planning.plain import PlainPlanner
-from quadnav.planning.problem import PlanningProblem
-from quadnav.planning.result import PlanResult, Progress
-from quadnav.planning.settings import PlannerSettings
-from quadnav.plugins import Registry, parse_spec
+from quadnav.plugins import Lazy, OptionalWheel, Registry
 
-#: ``planner(problem, settings, progress or None) -> PlanResult``.
-Planner = Callable[[PlanningProblem, PlannerSettings, Progress | None], PlanResult]
+#: The optional package OMPL's planners need.
+OMPL_WHEEL = OptionalWheel("ompl", "OMPL", "ompl")
 
-#: Prefix of the names of OMPL planners.
-OMPL_PREFIX = "ompl:"
-#: OMPL geometric planners offered through ``ompl:NAME``.
-OMPL_PLANNERS = ("RRTstar", "InformedRRTstar", "BITstar", "RRTConnect", "PRMstar")
-
-
-def _rrtstar(problem: PlanningProblem, settings: PlannerSettings,
-             progress: Progress | None) -> PlanResult:
-    from quadnav.planning.rrtstar import plan_rrtstar
-
-    return plan_rrtstar(problem, settings, progress)
-
-
-#: Planners by name: ours, those registered, those of installed packages' entry points.
-PLANNERS: Registry[Planner] = Registry("planner", "quadnav.planners", {"rrtstar": _rrtstar})
+#: Planners by name: ours, OMPL's (each imported when first used, which needs the optional
+#: wheel: :func:`~quadnav.planning.ompl_planners.ompl_planner`), those of installed
+#: packages' entry points, those registered.
+PLANNERS: Registry[Planner] = Registry("planner", "quadnav.planners", {
+    "rrtstar": "quadnav.planning.rrtstar:plan_rrtstar",
+    **{OMPL_PREFIX + name: Lazy("quadnav.planning.ompl_planners:ompl_planner", (name,),
+                                needs=OMPL_WHEEL) for name in OMPL_PLANNERS},
+}, located="module:FUNCTION or path/to/file.py:FUNCTION")
 
 
 def register_planner(name: str, planner: Planner, replace: bool = False) -> None:
@@ -59,34 +50,24 @@ def register_planner(name: str, planner: Planner, replace: bool = False) -> None
 
 def planner_names() -> list[str]:
     """Every planner name ``get_planner`` accepts (OMPL's whether installed or not)."""
-    return [*PLANNERS.names(), *(OMPL_PREFIX + name for name in OMPL_PLANNERS)]
+    return PLANNERS.names()
 
 
 def ompl_available() -> bool:
     """Whether the optional ``ompl`` wheel is installed."""
-    return importlib.util.find_spec("ompl") is not None
+    return not OMPL_WHEEL.missing()
 
 
 def get_planner(name: str) -> Planner:
-    """The planner called ``name``: a registered one, ``ompl:NAME``, or a plain function
-    named ``module:function`` or ``path/to/file.py:function``, with keyword arguments
-    (a :class:`~quadnav.planning.plain.PlainPlanner`, loaded in this process).
+    """The planner called ``name``: a registered one (``rrtstar``, ``ompl:NAME``, ...), or a
+    plain function named ``module:function`` or ``path/to/file.py:function``, with keyword
+    arguments (a :class:`~quadnav.planning.plain.PlainPlanner`, loaded in this process).
     QuadnavError naming the choices if there is none, and for a function that cannot be
     loaded or called as a planner (a :class:`~quadnav.plugins.PluginError` when loading it
-    raised)."""
+    raised, or for an OMPL planner without the optional wheel)."""
     if name in PLANNERS:
         return PLANNERS.get(name)
-    if name.startswith(OMPL_PREFIX) and name[len(OMPL_PREFIX):] in OMPL_PLANNERS:
-        if not ompl_available():
-            raise QuadnavError(f"planner {name!r} needs the optional OMPL wheel: "
-                               "python -m pip install 'quadnav[ompl]'")
-        from quadnav.planning.ompl_planners import plan_ompl
-
-        ompl_name = name[len(OMPL_PREFIX):]
-        return lambda problem, settings, progress: plan_ompl(problem, settings, ompl_name,
-                                                             progress)
-    if not name.startswith(OMPL_PREFIX) and parse_spec(name, "planner").is_located:
+    if PLANNERS.is_located(name):
         function, kwargs = PLANNERS.load(name)
         return PlainPlanner.named(name, function, kwargs)
-    raise QuadnavError(f"unknown planner {name!r}; expected one of {', '.join(planner_names())}"
-                       ", or module:FUNCTION or path/to/file.py:FUNCTION")
+    raise PLANNERS.unknown(name)

@@ -12,16 +12,17 @@ quadratic parasitic drag on the frame, translational lift and the flapping momen
 rotorpy's ``Multirotor`` computes them (see :mod:`quadnav.vehicle.dynamics`).
 
 Presets are TOML files shipped in ``quadnav/vehicle/presets`` (``tello``, ``rbe595``);
-each states its sources. A user's file sets any keys on top of the preset named by its
-``based_on`` key (default ``tello``). A rotorpy parameter dict is a vehicle too
-(:mod:`quadnav.vehicle.rotorpy_params`).
+each states its sources; a plug-in adds one to :data:`PRESETS`. A user's file sets any keys
+on top of the preset named by its ``based_on`` key (default ``tello``). A rotorpy parameter
+dict is a vehicle too (:mod:`quadnav.vehicle.rotorpy_params`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -32,7 +33,7 @@ from quadnav.arrays import FloatArray
 from quadnav.config import from_table, read_toml, require, vector_field
 from quadnav.errors import QuadnavError
 from quadnav.inputfiles import not_a_file, special_file
-from quadnav.plugins import load_target, parse_spec
+from quadnav.plugins import Registry, load_target, parse_spec
 
 #: Standard gravity, m/s^2.
 GRAVITY = 9.81
@@ -163,14 +164,32 @@ class VehicleParams:
         return self.drag + 4.0 * self.hover_rotor_speed * self.rotor_drag
 
 
+#: Where the shipped presets are.
+_PRESETS = resources.files("quadnav.vehicle") / "presets"
+
+
+def shipped_preset(name: str) -> VehicleParams:
+    """The preset ``name`` shipped as ``quadnav/vehicle/presets/NAME.toml``."""
+    with resources.as_file(_PRESETS / f"{name}.toml") as real:
+        table = read_toml(real)
+    table.pop("based_on", None)
+    return from_table(VehicleParams(name=name), table, f"preset {name}")
+
+
+#: ``preset() -> VehicleParams``: a new one on every call.
+Preset = Callable[[], VehicleParams]
+#: Vehicle presets by name: those shipped, those of installed packages'
+#: ``quadnav.vehicles`` entry points, those registered (``PRESETS.register(name, preset)``).
+PRESETS: Registry[Preset] = Registry("vehicle preset", "quadnav.vehicles", {
+    name: functools.partial(shipped_preset, name)
+    for name in sorted(p.name.removesuffix(".toml") for p in _PRESETS.iterdir()
+                       if p.name.endswith(".toml"))
+})
+
+
 def preset_names() -> list[str]:
-    """Names of the shipped presets."""
-    return sorted(p.name.removesuffix(".toml") for p in _presets().iterdir()
-                  if p.name.endswith(".toml"))
-
-
-def _presets():
-    return resources.files("quadnav.vehicle") / "presets"
+    """Names of the presets: those shipped, then those of plug-ins."""
+    return PRESETS.names()
 
 
 def vehicle_forms() -> str:
@@ -184,12 +203,8 @@ def load_params(spec: str | Path = DEFAULT_PRESET) -> VehicleParams:
     parameter dict named where it is, ``module:NAME`` or ``path/to/file.py:NAME``, with
     keys replaced by keyword arguments if any (``...:quad_params(k_d=0, k_z=0)``; see
     :mod:`quadnav.vehicle.rotorpy_params`)."""
-    if str(spec) in preset_names():
-        path = _presets() / f"{spec}.toml"
-        with resources.as_file(path) as real:
-            table = read_toml(real)
-        table.pop("based_on", None)
-        return from_table(VehicleParams(name=str(spec)), table, f"preset {spec}")
+    if str(spec) in PRESETS:
+        return PRESETS.get(str(spec))()
     path = Path(spec)
     if path.is_file():
         return params_from_table(read_toml(path), str(path), path.stem)

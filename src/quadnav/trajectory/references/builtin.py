@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.limits import MAX_DURATION, SPEED, Range
+from quadnav.plugins import Registry
 from quadnav.specs import (
     AXIS,
     FLOAT,
@@ -306,7 +307,7 @@ class ReferenceType:
     make: Callable[[str, dict[str, Any]], Reference]
 
 
-_TYPES = {t.name: t for t in (
+_OURS = (
     ReferenceType("hover", "hold still at (0, 0, height)", (
         _height(1.0),
         Param("duration", FLOAT, 5.0, "how long, s", DURATION)), _hover),
@@ -343,22 +344,28 @@ _TYPES = {t.name: t for t in (
         Param("fy", INT, 2, "cycles along y per lap", FREQUENCY),
         Param("fz", INT, 3, "cycles along z per lap", FREQUENCY),
         _period(10.0), _laps(1.0), _height(1.0), RAMP_PARAM), _lissajous),
-)}
+)
+#: The built-in references by name: ours, those of installed packages'
+#: ``quadnav.references`` entry points, those registered
+#: (``REFERENCES.register(name, reference_type)``).
+REFERENCES: Registry[ReferenceType] = Registry(
+    "reference", "quadnav.references", {t.name: t for t in _OURS}, expects=ReferenceType)
 
 
 def reference_names() -> list[str]:
     """Names of the built-in references."""
-    return list(_TYPES)
+    return REFERENCES.names()
 
 
 def describe_references() -> list[SpecInfo]:
     """Every built-in reference with a summary and its parameters."""
-    return [SpecInfo(t.name, t.summary, describe_params(t.params)) for t in _TYPES.values()]
+    types = {name: REFERENCES.get(name) for name in REFERENCES}
+    return [SpecInfo(name, t.summary, describe_params(t.params)) for name, t in types.items()]
 
 
 def is_builtin_reference(text: str) -> bool:
     """Whether ``text`` names a built-in reference (the part before any ``:``)."""
-    return text.partition(":")[0].strip() in _TYPES
+    return text.partition(":")[0].strip() in REFERENCES
 
 
 def build_reference(spec: str) -> Reference:
@@ -370,10 +377,10 @@ def build_reference(spec: str) -> Reference:
             its end, too few laps for the ramps): one line naming the spec.
     """
     name, colon, rest = (part.strip() for part in spec.partition(":"))
-    kind = _TYPES.get(name)
-    if kind is None:
+    if name not in REFERENCES:
         raise QuadnavError(f"{spec}: unknown built-in reference {name!r} "
-                           f"(known: {', '.join(_TYPES)})")
+                           f"(known: {', '.join(REFERENCES)})")
+    kind = REFERENCES.get(name)
     try:
         canonical, values = canonical_spec(name, kind.params, rest if colon else None)
         return kind.make(canonical, values)
@@ -406,5 +413,5 @@ def load_reference(source: str | Path, rate: float = COURSE_MP_RATE, dt: float |
         chosen = load_trajectory_class(str(source))
         return flat_reference(chosen.build(), chosen.text, dt, duration)
     raise QuadnavError(f"{source}: no such file, not a built-in reference (built-in: "
-                       f"{', '.join(_TYPES)}), and not a trajectory class (module:Class or "
+                       f"{', '.join(REFERENCES)}), and not a trajectory class (module:Class or "
                        "path/to/file.py:Class)")

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from quadnav.errors import MapError
+from quadnav.plugins import Registry
 from quadnav.specs import (
     ParamInfo,
     SpecError,
@@ -34,6 +35,7 @@ from quadnav.world.model import DEFAULT_MARGIN, World
 __all__ = [
     "DEFAULT_MARGIN",
     "DEFAULT_WORLD_SPEC",
+    "WORLDS",
     "ParamInfo",
     "SpecInfo",
     "build_world",
@@ -47,21 +49,23 @@ DEFAULT_WORLD_SPEC = "forest"
 #: Layouts drawn for one spec before giving up on finding a connected one.
 MAX_ATTEMPTS = 20
 
-_GENERATORS: dict[str, Generator] = {
+#: The built-in worlds by name: ours, those of installed packages' ``quadnav.worlds``
+#: entry points, those registered (``WORLDS.register(name, generator)``).
+WORLDS: Registry[Generator] = Registry("world", "quadnav.worlds", {
     g.name: g for g in (empty.GENERATOR, forest.GENERATOR, window.GENERATOR, maze.GENERATOR)
-}
+}, expects=Generator)
 
 
 def world_names() -> list[str]:
     """Names of the built-in worlds."""
-    return list(_GENERATORS)
+    return WORLDS.names()
 
 
 def describe_worlds() -> list[SpecInfo]:
     """Every built-in world with a summary and its parameters."""
-    return [
-        SpecInfo(g.name, g.summary, describe_params(g.params)) for g in _GENERATORS.values()
-    ]
+    generators = {name: WORLDS.get(name) for name in WORLDS}
+    return [SpecInfo(name, g.summary, describe_params(g.params))
+            for name, g in generators.items()]
 
 
 def is_builtin_spec(text: str) -> bool:
@@ -69,7 +73,7 @@ def is_builtin_spec(text: str) -> bool:
 
     The parameters are not checked; a path such as ``forest.txt`` is not a spec.
     """
-    return text.partition(":")[0].strip() in _GENERATORS
+    return text.partition(":")[0].strip() in WORLDS
 
 
 def build_world(spec: str) -> World:
@@ -80,10 +84,10 @@ def build_world(spec: str) -> World:
     too high to place the trunks), or no connected layout in :data:`MAX_ATTEMPTS` draws.
     """
     name, colon, rest = (part.strip() for part in spec.partition(":"))
-    generator = _GENERATORS.get(name)
-    if generator is None:
+    if name not in WORLDS:
         raise MapError(spec, f"unknown built-in world {name!r} "
-                       f"(known: {', '.join(_GENERATORS)})")
+                       f"(known: {', '.join(WORLDS)})")
+    generator = WORLDS.get(name)
     try:
         canonical, values = canonical_spec(name, generator.params, rest if colon else None)
         seed = values.get("seed", 0)
