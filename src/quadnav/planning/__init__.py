@@ -13,7 +13,6 @@ import time
 
 import numpy as np
 
-from quadnav.planning.contract import Progress
 from quadnav.planning.plain import PlainPlanner
 from quadnav.planning.problem import PlanningProblem, make_problem
 from quadnav.planning.registry import get_planner, planner_names, register_planner

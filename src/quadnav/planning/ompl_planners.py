@@ -67,12 +67,13 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
-from quadnav.planning.contract import OMPL_PLANNERS, OMPL_PREFIX, Planner, Progress
+from quadnav.planning.contract import OMPL_PLANNERS, OMPL_PREFIX, Planner
 from quadnav.planning.problem import PlanningProblem
 from quadnav.planning.result import (
     IntArray,
     PlanResult,
     PlanStats,
+    Progress,
     no_path_message,
     path_length,
 )
