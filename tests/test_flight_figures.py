@@ -133,20 +133,15 @@ def test_write_run_draws_the_figures_from_the_folder_and_clears_stale_ones(missi
     assert not any((tmp_path / name).exists() for name in (*FIGURES, REPORT))
 
 
-def test_write_run_draws_each_figure_once(mission, tmp_path, monkeypatch):
+def test_write_run_draws_each_figure_once_and_spares_the_collector(mission, tmp_path,
+                                                                   monkeypatch):
     """What ``quadnav fly`` spends most of its figures' time on is drawing: each figure is
     laid out without drawing it and drawn once, when it is saved (it was drawn 16 times
-    for 4 figures: each layout round and saving drew it, saving twice)."""
+    for 4 figures: each layout round and saving drew it, saving twice). And the objects
+    alive before the figures are drawn are kept out of the garbage collector's
+    collections while they are (each full collection would walk them all again), and
+    handed back to it afterwards, so nothing stays out of its reach."""
     counter = DrawCounter(monkeypatch)
-    write_run(mission, tmp_path)
-    assert counter.of_figures() == [1] * len(FIGURES)
-
-
-def test_write_run_spares_the_collector_while_drawing_and_hands_everything_back(mission,
-                                                                              tmp_path):
-    """The objects alive before the figures are drawn are kept out of the garbage
-    collector's collections while they are (each full collection would walk them all
-    again), and handed back to it afterwards, so nothing stays out of its reach."""
     frozen: list[int] = []
 
     def watch(phase: str, info: dict) -> None:
@@ -158,6 +153,7 @@ def test_write_run_spares_the_collector_while_drawing_and_hands_everything_back(
         write_run(mission, tmp_path)
     finally:
         gc.callbacks.remove(watch)
+    assert counter.of_figures() == [1] * len(FIGURES)
     assert max(frozen) > 0
     assert gc.get_freeze_count() == 0
 
