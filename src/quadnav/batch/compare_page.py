@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from quadnav import __version__
 from quadnav.batch.compare import ALPHA, METRIC_NOTES, METRICS
+from quadnav.batch.summary import percent_text
 from quadnav.batch.summary_page import wrapped
 from quadnav.files import atomic_output
 from quadnav.pages import figure, render
@@ -85,10 +86,6 @@ def _number(value: float | None) -> str:
     return "—" if value is None else f"{value:.3g}"
 
 
-def _percent(value: float) -> str:
-    return f"{100 * value:.1f}"
-
-
 def median_text(spread: dict[str, Any]) -> str:
     """A metric's median and quartiles as shown: ``median [q1, q3]``."""
     if spread["median"] is None:
@@ -101,8 +98,8 @@ def leaderboard_rows(result: dict[str, Any]) -> tuple[list[str], list[list[str]]
     header = ["rank", "contender", "success", "95 % interval (%)",
               *(f"{m.title} ({m.unit})" for m in METRICS)]
     rows = [[str(c["rank"]), c["contender"],
-             f"{c['successes']}/{c['n']} = {_percent(c['success_rate'])} %",
-             f"{_percent(c['ci_low'])} to {_percent(c['ci_high'])}",
+             f"{c['successes']}/{c['n']} = {percent_text(c['success_rate'])} %",
+             f"{percent_text(c['ci_low'])} to {percent_text(c['ci_high'])}",
              *(median_text(c[m.name]) for m in METRICS)] for c in result["contenders"]]
     return header, rows
 

@@ -122,7 +122,7 @@ class _Base:
     @property
     def retried(self) -> int:
         """The jobs run again because the worker process running them died, so far."""
-        return sum(len(deaths.counts) for deaths in self._calls)
+        return len(self.retried_jobs)
 
     @property
     def retried_jobs(self) -> list[Any]:

@@ -47,8 +47,7 @@ def percent_text(fraction: float | None, digits: int = 1) -> str:
     successes in 10,000 missions starts at 99.96 %, not 100.0 %); a dash for None."""
     if fraction is None:
         return "\u2014"
-    text = f"{100 * fraction:.{digits}f}"
-    for places in range(digits, 5):
+    for places in range(digits, max(digits, 4) + 1):
         text = f"{100 * fraction:.{places}f}"
         if fraction in (0.0, 1.0) or float(text) not in (0.0, 100.0):
             break
