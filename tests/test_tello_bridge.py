@@ -540,6 +540,18 @@ def test_cli_refuses_a_plan_outside_the_fence(tmp_path):
 
 
 @needs_netns
+def test_the_first_move_starts_from_the_height_after_the_takeoff(client_ns, tmp_path):
+    # At 40 times real time a state packet (10 a wall-clock second) is 4 s of drone time
+    # apart, twice a takeoff: the last one before the takeoff's ``ok`` was sent during the
+    # climb or before it, and a height read from it sent the drone up to 0.8 m too high.
+    plan = planned_room()
+    flown, drone = emulated_flight(plan, client_ns, tmp_path, "waypoints", 40.0)
+    assert flown.outcome.status is Status.LANDED, flown.outcome.message
+    _, positions = drone.track()
+    assert positions[:, 2].max() == pytest.approx(TAKEOFF_HEIGHT, abs=0.03)
+
+
+@needs_netns
 @pytest.mark.parametrize("mode", ["waypoints", "curves", "rc"])
 def test_whole_mission_on_the_emulator(request, client_ns, tmp_path, mode):
     # rc on the course takes 84 s of drone time (its dry run above): the room's is shorter,

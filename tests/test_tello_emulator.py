@@ -378,6 +378,10 @@ def test_cli_emulate_serves_djitellopy_until_ctrl_c(client_ns, tmp_path):
         tello.connect()
         assert tello.query_battery() == 100 and tello.get_yaw() == 0
         tello.end()
+        deadline = time.monotonic() + 30.0  # rows come as the emulator's clock ticks
+        while (not truth.exists() or truth.read_text().count("\n") <= 10) and \
+                time.monotonic() < deadline:
+            time.sleep(0.05)
     finally:
         process.send_signal(signal.SIGINT)
         _, err = process.communicate(timeout=10)

@@ -148,7 +148,10 @@ def log_events(folder) -> list[str]:
 @pytest.mark.parametrize(("faults", "status", "fragments"), [
     ({"drop_replies": 0.2}, Status.STOPPED,
      ["no reply to 'go", "; safe stop: 'stop' ", ", landed at about ("]),
-    ({"reply_delay_s": 1.5}, Status.STOPPED, ["no reply to '", ", landed at about ("]),
+    # At half the usual time scale a 2.4 s late reply is in time for the takeoff (3 s) and
+    # late for the first go (1.84 s), with 0.6 s to spare each way and 15 s of drone time
+    # (3 s) before a drone left without commands lands by itself.
+    ({"reply_delay_s": 2.4}, Status.STOPPED, ["no reply to 'go ", ", landed at about ("]),
     ({"dead_after_s": 1.5}, Status.LINK_LOST,
      ["no state packet for 1 s", "'stop' got no reply, and 'land' got no answer",
       "if the Tello heard none of it, it finishes the go move it flies (inside the "
@@ -159,7 +162,9 @@ def log_events(folder) -> list[str]:
 def test_each_fault_ends_on_the_floor_inside_the_fence(course, client_ns, tmp_path, faults,
                                                         status, fragments):
     *_, plan = course
-    flown, drone = emulated_flight(plan, client_ns, tmp_path, faults=Faults(**faults))
+    scale = 5.0 if "reply_delay_s" in faults else 10.0
+    flown, drone = emulated_flight(plan, client_ns, tmp_path, scale=scale,
+                                   faults=Faults(**faults))
     outcome = flown.outcome
     assert outcome.status is status and exit_code(outcome) == (3 if status is
                                                                Status.LINK_LOST else 1)

@@ -291,7 +291,7 @@ class _Flight:
     def _go(self) -> str:
         """Fly the ``go`` moves (``curves`` mode: and the ``curve`` commands); returns
         what was done, for the outcome."""
-        height = (self.link.get_height() / 100.0 if self.link.reports_state
+        height = (self.link.settled_height() / 100.0 if self.link.reports_state
                   else TAKEOFF_HEIGHT)
         curving = self.settings.mode == "curves"
         moves = (self.plan.curve_moves(height, self.plan.speed) if curving

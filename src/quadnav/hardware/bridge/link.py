@@ -61,6 +61,10 @@ class Link(Protocol):
     def get_height(self) -> int:
         """Height above the takeoff floor, cm, from the latest state packet."""
 
+    def settled_height(self) -> int:
+        """Height above the takeoff floor, cm, from a state packet sent after the last
+        reply (waited for)."""
+
     def close(self) -> None:
         """Let go of the connection."""
 
@@ -103,6 +107,8 @@ class DryRunLink:
     def get_height(self) -> int:
         """Not available: a dry run has no drone."""
         raise LinkLostError("a dry run has no height reading")
+
+    settled_height = get_height
 
     def close(self) -> None:
         """Nothing to let go of."""

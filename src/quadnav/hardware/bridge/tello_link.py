@@ -50,19 +50,21 @@ class _Replies(list):
 
 class _Record(dict):
     """djitellopy's per-drone record (``responses``, ``state``), logging state packets,
-    passing them to ``on_state`` and noting when the last one came (monotonic seconds,
-    None before the first)."""
+    passing them to ``on_state``, counting them and noting when the last one came (monotonic
+    seconds, None before the first)."""
 
     def __init__(self, log: TelloLog, on_state: Callable[[dict], None]) -> None:
         super().__init__(responses=_Replies(log), state={})
         self._log = log
         self._on_state = on_state
         self.last_state: float | None = None
+        self.states = 0
 
     def __setitem__(self, key: str, value: object) -> None:
         super().__setitem__(key, value)
         if key == "state" and value:
             self.last_state = time.monotonic()
+            self.states += 1
             self._log.state(value)
             self._on_state(value)
 
@@ -151,6 +153,19 @@ class TelloLink(Tello):
             raise AutoLandingError(f"the Tello answered '{command}' with '{reply}': it is "
                                    "landing by itself")
         raise CommandRefusedError(f"the Tello answered '{command}' with '{reply}'")
+
+    def settled_height(self) -> int:
+        """Height above the takeoff floor, cm, from the first state packet to arrive from
+        now (the latest may have left the drone before the last reply did: at ten a second,
+        during a takeoff's climb); LinkLostError if none comes for ``link_timeout`` s."""
+        record, since = self._record, time.monotonic()
+        seen = record.states
+        while record.states == seen:
+            if time.monotonic() - since > self.link_timeout:
+                raise LinkLostError(f"no state packet for {self.link_timeout:g} s while "
+                                    "waiting for the height after the takeoff")
+            time.sleep(_POLL)
+        return self.get_height()
 
     def state_age(self) -> float:
         """Seconds since the last state packet (inf before the first)."""
