@@ -20,7 +20,10 @@ ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 A worker process that dies (killed by a signal or the OOM killer, a crash in compiled
 code, ``os._exit`` in a plug-in) loses only the job it ran: a new worker takes its place
 and the job runs again, at most :data:`RETRIES` times; a job whose worker dies every time
-is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`). A
+is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`). A job
+of several parts (``split(item)``: a batch's missions that share a plan) runs again as its
+parts, one job each, so that a part that kills its worker every time is the only one given
+up. A
 worker that dies before it has started (in its warm-up) is an error at once
 (:class:`WorkerDiedError`): another would die the same way.
 Each executor counts the jobs run again (:attr:`~_Base.retried`). A job's result depends
@@ -70,6 +73,9 @@ WarmUp = Callable[[Any], None]
 #: ``lost(item, reason) -> result``: the result of a job given up because its worker
 #: process died each time it ran, ``reason`` saying so in words.
 Lost = Callable[[Any, str], Any]
+#: ``split(item) -> parts``: the items a job runs again as after its worker died (one, or
+#: none to run it again whole: a job of one part).
+Split = Callable[[Any], list[Any]]
 
 
 def cpu_count() -> int:
@@ -91,11 +97,13 @@ class Executor(Protocol):
     #: the items of those jobs
     retried_jobs: list[Any]
 
-    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
-                      ) -> Iterator[tuple[int, Any]]:
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
+                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
         """``(index, function(shared, items[index]))`` for every item, as each finishes.
         A job whose worker process dies is run again, at most :data:`RETRIES` times; then
-        its result is ``lost(item, reason)`` (WorkerDiedError without ``lost``)."""
+        its result is ``lost(item, reason)`` (WorkerDiedError without ``lost``). With
+        ``split``, a job of several parts runs again as one job per part instead, each
+        part's index counting on from ``len(items)`` (in :attr:`retried_jobs`' order)."""
 
     def close(self, cancel: bool = False) -> None:
         """Release the workers; with ``cancel``, at once, dropping unfinished jobs."""
@@ -114,9 +122,10 @@ class _Base:
     def __init__(self) -> None:
         self._calls: list[_Deaths] = []
 
-    def _deaths(self, items: Sequence[Any], lost: Lost | None) -> _Deaths:
+    def _deaths(self, items: Sequence[Any], lost: Lost | None, split: Split | None
+                ) -> _Deaths:
         """The worker deaths of a new :meth:`map_unordered` call's jobs."""
-        self._calls.append(_Deaths(items, lost))
+        self._calls.append(_Deaths(items, lost, split))
         return self._calls[-1]
 
     @property
@@ -154,17 +163,31 @@ class WorkerDiedError(QuadnavError):
 
 
 class _Deaths:
-    """The worker deaths of the jobs of one :meth:`Executor.map_unordered` call."""
+    """The worker deaths of the jobs of one :meth:`Executor.map_unordered` call: its
+    ``items``, the parts of jobs split after a death appended."""
 
-    def __init__(self, items: Sequence[Any], lost: Lost | None) -> None:
-        self.items = items
+    def __init__(self, items: Sequence[Any], lost: Lost | None, split: Split | None
+                 ) -> None:
+        self.items = list(items)
         self.lost = lost
+        self.split = split
         self.counts: Counter[int] = Counter()
 
-    def run_again(self, index: int) -> bool:
-        """Count a death of job ``index``'s worker; whether to run the job again."""
+    def run_again(self, index: int) -> list[int]:
+        """Count a death of job ``index``'s worker; the jobs to run in its place: itself,
+        its parts (new items, each counting the death instead of it), or none when it has
+        run :data:`RETRIES` times again already."""
         self.counts[index] += 1
-        return self.counts[index] <= RETRIES
+        if self.counts[index] > RETRIES:
+            return []
+        parts = [] if self.split is None else self.split(self.items[index])
+        if len(parts) <= 1:
+            return [index]
+        deaths = self.counts.pop(index)
+        first = len(self.items)
+        self.items += parts
+        self.counts.update(dict.fromkeys(range(first, len(self.items)), deaths))
+        return list(range(first, len(self.items)))
 
     def given_up(self, index: int, cause: str) -> Any:
         """The result of job ``index``, given up after its worker's last death of
@@ -354,10 +377,11 @@ class LocalExecutor(_Base):
         self._arguments = (shared, warm_up, self.numba_threads, os.getpid())
         self._pool = [_Worker(self._arguments) for _ in range(self.workers)]
 
-    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
-                      ) -> Iterator[tuple[int, Any]]:
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
+                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
         todo = deque(range(len(items)))
-        deaths = self._deaths(items, lost)
+        deaths = self._deaths(items, lost, split)
+        items = deaths.items
         while todo or any(worker.job is not None for worker in self._pool):
             for worker in self._pool:
                 if worker.job is None and todo:
@@ -377,8 +401,9 @@ class LocalExecutor(_Base):
                     raise WorkerDiedError("a worker process died as it started "
                                           f"({_end_of(worker.process)})")
                 cause = self._replace(worker)
-                if deaths.run_again(index):
-                    todo.appendleft(index)
+                again = deaths.run_again(index)
+                if again:
+                    todo.extendleft(reversed(again))
                 else:
                     yield index, deaths.given_up(index, cause)
 
@@ -539,12 +564,13 @@ class RayExecutor(_Base):
         self._task = ray.remote(num_cpus=1, max_retries=0)(_ray_job)
         self._pending: dict[Any, int] = {}
 
-    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None
-                      ) -> Iterator[tuple[int, Any]]:
+    def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
+                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
         ray = self._ray
         died = (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError,
                 ray.exceptions.LocalRayletDiedError)
-        deaths = self._deaths(items, lost)
+        deaths = self._deaths(items, lost, split)
+        items = deaths.items
 
         def submit(index: int) -> None:
             self._pending[self._task.remote(function, self._shared, self._warm_up,
@@ -560,8 +586,10 @@ class RayExecutor(_Base):
                 try:
                     result = ray.get(ref)
                 except died as error:
-                    if deaths.run_again(index):
-                        submit(index)
+                    again = deaths.run_again(index)
+                    for part in again:
+                        submit(part)
+                    if again:
                         continue
                     result = deaths.given_up(index, type(error).__name__)
                 yield index, result

@@ -56,6 +56,12 @@ def plan_jobs(missions: Sequence[MissionSpec], workers: int) -> list[list[Missio
     return jobs
 
 
+def one_by_one(job: list[MissionSpec]) -> list[list[MissionSpec]]:
+    """A job whose worker died, as the jobs it runs again as: each mission alone, so that
+    only a mission that kills its worker every time is given up."""
+    return [[mission] for mission in job]
+
+
 class BatchRun:
     """A batch about to run into ``folder``: its context loaded, its folder checked.
 
@@ -121,7 +127,8 @@ class BatchRun:
                     if on_start is not None:
                         on_start(executor.workers, executor.numba_threads)
                     for _, rows in executor.map_unordered(
-                            fly_rows, jobs, partial(refused_rows, self.context)):
+                            fly_rows, jobs, partial(refused_rows, self.context),
+                            one_by_one):
                         for row in rows:
                             row = compact_row(row)
                             journal.append(row)
