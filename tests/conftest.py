@@ -46,7 +46,10 @@ def pytest_configure(config: pytest.Config) -> None:
     once, in two processes side by side, the workers load them from the cache instead. A
     warm cache makes this a few seconds of loading. It is a speed-up only: a failure here
     is ignored, and the tests that need the kernels compile them themselves."""
-    if hasattr(config, "workerinput") or not config.getoption("numprocesses", None):
+    if hasattr(config, "workerinput"):
+        _one_numba_thread()
+        return
+    if not config.getoption("numprocesses", None):
         return
     with tempfile.TemporaryDirectory() as tmp:
         chains = [threading.Thread(target=_run_chain, args=(chain, tmp)) for chain in WARM_UP]
@@ -54,6 +57,15 @@ def pytest_configure(config: pytest.Config) -> None:
             chain.start()
         for chain in chains:
             chain.join()
+
+
+def _one_numba_thread() -> None:
+    """Run this xdist worker's numba kernels on one thread, as a batch's workers do: three
+    workers on two cores, each spinning up numba's threads for every parallel kernel, fought
+    each other (a test of parallel kernels took ten times as long beside the others)."""
+    import numba
+
+    numba.set_num_threads(1)
 
 
 def _run_chain(chain: tuple[tuple[str, ...], ...], tmp: str) -> None:

@@ -46,6 +46,7 @@ def random_boxes(rng: np.random.Generator, n: int, largest: float,
     return boxes
 
 
+@pytest.mark.xdist_group("former-sweep")  # compiled (uncached) once, on one worker
 @pytest.mark.parametrize(("n", "largest", "grid"), [
     (30, 4.0, None), (200, 2.0, None), (300, 6.0, None), (200, 3.0, 0.5), (400, 10.0, 1.0),
 ])

@@ -29,6 +29,10 @@ def _track(folder, *args: str, here: bool = True) -> dict:
     return json.loads((folder / "metrics.json").read_text())
 
 
+#: The tests of :func:`step`'s folder, on one xdist worker: the step is tracked once.
+STEP = pytest.mark.xdist_group("track-step")
+
+
 @pytest.fixture(scope="module")
 def step(tmp_path_factory):
     """A 1 m step along x on the tello, with its figures and report."""
@@ -47,6 +51,7 @@ def test_hover_holds_still(tmp_path):
     assert world["bounds"]["extents"] == [-1, 1, -1, 1, 0, 2.5] and world["blocks"] == []
 
 
+@STEP
 def test_a_step_settles_with_the_stated_metrics(step):
     folder, metrics = step
     assert metrics["success"] and metrics["reference"] == (
@@ -132,6 +137,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
+@STEP
 def test_report_view_and_animate_accept_a_track_folder(step, tmp_path):
     folder, _ = step
     run = read_run(folder)
@@ -151,6 +157,7 @@ def test_report_view_and_animate_accept_a_track_folder(step, tmp_path):
     assert (tmp_path / "step.gif").read_bytes()[:6] == b"GIF89a"
 
 
+@STEP
 def test_the_states_figure_marks_the_step_response(step):
     folder, metrics = step
     run = read_run(folder)

@@ -7,12 +7,23 @@ from __future__ import annotations
 import json
 
 import numba
+import pytest
 from batchtools import MISSIONS, numba_threads_in_worker, rows_one_by_one, write_spec
 
 from quadnav.batch.executor import LocalExecutor
 from quadnav.batch.grid import read_spec
 from quadnav.batch.run import BatchRun
 from quadnav.batch.table import read_rows, same_row
+
+
+@pytest.fixture
+def numbas_own_threads():
+    """This process runs numba on numba's own thread count during the test (the suite's
+    workers run one thread each: tests/conftest.py)."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    yield
+    numba.set_num_threads(before)
 
 
 def test_several_local_workers_each_run_one_numba_thread():
@@ -32,7 +43,7 @@ def test_a_single_local_worker_keeps_numbas_own_thread_count():
 
 
 def test_a_batch_on_one_numba_thread_a_worker_gives_the_rows_of_numbas_own_and_says_so(
-        tmp_path):
+        tmp_path, numbas_own_threads):
     spec = write_spec(tmp_path / "spec")
     run = BatchRun(read_spec(spec), tmp_path / "out")
     started = []
