@@ -12,6 +12,16 @@ mission its own plan. It prints per case the median CPU seconds per mission, the
 the rows' stage times (planning, trajectory, flight), the successes, the plans made, and the
 minutes 10,000 such missions would take on the workers' cores.
 
+``--stages`` flies the missions of both cases (the first ``--missions`` of each; all by
+default, 20 with ``--quick``) in this process, one after the other, as one batch worker
+flies them (one numba thread, its kernels loaded, maps loaded afresh and a fresh stage
+cache for each case, so each case pays the work a map needs once again), and prints per
+case where a mission's CPU time goes (:mod:`quadnav.profiling`): per stage the runs, the
+missions that ran it, the median and mean ms per mission, the ms of all the missions and
+its share of the CPU; then how many missions ran the work a map needs once, and the
+median CPU per mission profiled against a baseline pass over the same missions
+unprofiled (flown first, which also loads the kernels the missions use).
+
 The missions: the built-in worlds ``forest`` and ``window`` alternately, each with its own
 start and goal, seeds 0, 1, 2, ... (half the missions each), at 2 m/s with 3 m/s^2 and
 ``fly``'s search budget (the stall rule, with at most 50,000 samples of improvement after
@@ -42,14 +52,20 @@ import subprocess
 import sys
 import tempfile
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
 from planning import table
 
+from quadnav.batch.fly_one import flown_row, load_context, warm_up
 from quadnav.batch.folder import PLANS
+from quadnav.batch.grid import read_spec
+from quadnav.batch.stages import StageCache
 from quadnav.batch.table import RESULTS_CSV, WALL_TIME_COLUMNS, read_rows
+from quadnav.batch.threads import use_numba_threads
 from quadnav.mission import DEFAULT_IMPROVE
+from quadnav.profiling import StageProfile, profiled
 
 #: The console script beside this Python.
 QUADNAV = str(Path(sys.executable).with_name("quadnav"))
@@ -147,6 +163,12 @@ PROJECTED = 10_000
 STAGES = ("planning_time_s", "trajectory_time_s", "sim_wall_time_s")
 
 
+#: The cases: name, seeds as written in the spec, missions.
+CASES = (("(a) shared plans", f"{{plan = {PLAN_SEEDS}, sim = {SIM_SEEDS}}}",
+          PLAN_SEEDS * SIM_SEEDS),
+         ("(b) own plans", str(OWN_PLANS), OWN_PLANS))
+
+
 def case_spec(seeds: str, improve: int) -> str:
     """A batch spec of the cases on the course map, its start and goal, ``seeds`` as
     written in the spec."""
@@ -185,10 +207,8 @@ def run_case(name: str, seeds: str, count: int, workers: int, improve: int, repe
 def cases(workers: int, improve: int, repeats: int) -> None:
     """Cases (a) and (b) of issue 29 (see the module docstring), timed."""
     with tempfile.TemporaryDirectory() as scratch:
-        lines = [run_case("(a) shared plans", f"{{plan = {PLAN_SEEDS}, sim = {SIM_SEEDS}}}",
-                          PLAN_SEEDS * SIM_SEEDS, workers, improve, repeats, Path(scratch)),
-                 run_case("(b) own plans", str(OWN_PLANS), OWN_PLANS, workers, improve,
-                          repeats, Path(scratch))]
+        lines = [run_case(name, seeds, count, workers, improve, repeats, Path(scratch))
+                 for name, seeds, count in CASES]
     print(f"{SHARED_MAP.name} with the course's start and goal, gusts {GUSTS:g} N, "
           f"{SPEED:g} m/s, {ACCELERATION:g} m/s^2, fly's search budget (at most {improve:,} "
           f"samples of improvement), quadnav batch --workers {workers}, medians of {repeats} "
@@ -199,12 +219,134 @@ def cases(workers: int, improve: int, repeats: int) -> None:
                  "successes", "plans made", f"{PROJECTED:,} missions, min"], lines))
 
 
+#: The stages of a mission (quadnav.profiling's names) in the order they run, as the
+#: table names them; a stage not listed here is shown by its own name, last.
+STAGE_LABELS = {
+    "query": "query: checks and legs",
+    "proof": "query: connectivity proof",
+    "search": "search: set-up and bookkeeping",
+    "first path": "search: first path",
+    "improvement": "search: improvement",
+    "shortcut": "refinement: shortcut",
+    "smoothing": "refinement: smoothing",
+    "trajectory": "trajectory: all but its timing",
+    "fastest timing": "trajectory: fastest timing",
+    "simulation": "closed-loop simulation",
+    "metrics": "metrics",
+    "row": "row",
+    "inflated world": "once per map: inflated world",
+    "block grid": "once per map: block grid",
+    "proof labels": "once per map: proof's voxel labels",
+}
+#: The stages a map needs once (made where they are made, not where they are found).
+ONCE_PER_MAP = ("inflated world", "block grid", "proof labels")
+#: The row of the CPU spent outside every stage (settings, keys, the stage cache).
+OTHER = "other (settings, keys, caches)"
+
+
+@dataclass(frozen=True)
+class Flown:
+    """One mission flown in this process: its CPU seconds and its stages' (empty when
+    it was not profiled)."""
+
+    cpu: float
+    stages: StageProfile
+
+
+def fly_in_process(spec_text: str, limit: int | None, scratch: Path, profile: bool
+                   ) -> list[Flown]:
+    """The first ``limit`` (None: all) missions of the batch spec ``spec_text`` flown one
+    after the other in this process as a batch worker flies them: its maps loaded afresh,
+    :func:`warm_up`, a fresh stage cache keeping its plans under ``scratch``; each mission
+    timed (CPU seconds) and, with ``profile``, profiled."""
+    scratch.mkdir(parents=True, exist_ok=True)
+    spec_path = scratch / "spec.toml"
+    spec_path.write_text(spec_text)
+    spec = read_spec(spec_path)
+    context = load_context(spec)
+    warm_up(context)
+    cache = StageCache(scratch / PLANS)
+    flown = []
+    for mission in spec.missions()[:limit]:
+        with profiled() if profile else nullcontext(StageProfile()) as stages:
+            began = time.process_time()
+            flown_row(context, mission, cache)
+            cpu = time.process_time() - began
+        flown.append(Flown(cpu, stages))
+    return flown
+
+
+def stage_lines(flown: list[Flown]) -> list[list[str]]:
+    """The lines of the stage table of the profiled missions ``flown``: per stage (in
+    the order of :data:`STAGE_LABELS`) its runs, the missions that ran it, the median and
+    mean ms per mission, the ms of all missions and its share of the CPU; then the CPU
+    outside every stage and the total."""
+    total = sum(mission.cpu for mission in flown)
+    ran = {name for mission in flown for name in mission.stages.runs}
+    names = [*(name for name in STAGE_LABELS if name in ran), *sorted(ran - set(STAGE_LABELS))]
+
+    def line(label: str, runs: str, missions: str, seconds: list[float]) -> list[str]:
+        return [label, runs, missions, f"{1000 * statistics.median(seconds):.2f}",
+                f"{1000 * statistics.mean(seconds):.2f}", f"{1000 * sum(seconds):.1f}",
+                f"{100 * sum(seconds) / total:.1f} %"]
+
+    lines = [line(STAGE_LABELS.get(name, name),
+                  str(sum(mission.stages.runs[name] for mission in flown)),
+                  str(sum(name in mission.stages.runs for mission in flown)),
+                  [mission.stages.seconds.get(name, 0.0) for mission in flown])
+             for name in names]
+    other = [mission.cpu - sum(mission.stages.seconds.values()) for mission in flown]
+    return [*lines, line(OTHER, "", "", other),
+            line("total", "", str(len(flown)), [mission.cpu for mission in flown])]
+
+
+def once_per_map(flown: list[Flown]) -> str:
+    """How many of the missions ``flown`` ran the work a map needs once, and its runs."""
+    ran = [mission for mission in flown
+           if any(mission.stages.runs[name] for name in ONCE_PER_MAP)]
+    runs = ", ".join(f"{name} {sum(mission.stages.runs[name] for mission in flown)}"
+                     for name in ONCE_PER_MAP)
+    return (f"work a map needs once ran in {len(ran)} of {len(flown)} missions "
+            f"(runs: {runs})")
+
+
+def stage_profiles(improve: int, limit: int | None) -> None:
+    """Cases (a) and (b)'s missions (the first ``limit`` of each) flown and profiled in
+    this process (see the module docstring)."""
+    use_numba_threads(1)
+    print(f"{SHARED_MAP.name} with the course's start and goal, gusts {GUSTS:g} N, "
+          f"{SPEED:g} m/s, {ACCELERATION:g} m/s^2, fly's search budget (at most {improve:,} "
+          f"samples of improvement), flown in one process with one numba thread as a "
+          f"batch worker flies them; CPU ms per mission (process time) by stage, each "
+          f"stage's own (the stages it runs excluded)")
+    for name, seeds, count in CASES:
+        with tempfile.TemporaryDirectory() as scratch:
+            baseline = fly_in_process(case_spec(seeds, improve), limit, Path(scratch) / "base",
+                                      profile=False)
+            flown = fly_in_process(case_spec(seeds, improve), limit, Path(scratch) / "prof",
+                                   profile=True)
+        plain = statistics.median(mission.cpu for mission in baseline)
+        profiled_cpu = statistics.median(mission.cpu for mission in flown)
+        print(f"\n{name}: {len(flown)} of its {count} missions\n")
+        print(table(["stage", "runs", "missions", "median ms per mission",
+                     "mean ms per mission", "ms in all", "share of CPU"], stage_lines(flown)))
+        print(f"\n{once_per_map(flown)}; median CPU per mission {1000 * profiled_cpu:.1f} ms "
+              f"profiled, {1000 * plain:.1f} ms unprofiled ({profiled_cpu / plain:.2f}x)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", action="store_true",
                         help="cases (a) 200 missions sharing 20 plans and (b) 200 missions "
                              "of their own plans on rbe595/map1, with the projection")
+    parser.add_argument("--stages", action="store_true",
+                        help="where a mission's CPU goes, stage by stage: the missions of "
+                             "both cases profiled in this process (the first --missions of "
+                             "each; all without it)")
     args, count, repeats = study_arguments("", parser)
+    if args.stages:
+        stage_profiles(args.improve, args.missions or (20 if args.quick else None))
+        return
     if args.cases:
         cases(args.workers, args.improve, repeats)
         return

@@ -27,7 +27,13 @@ from quadnav.batch.grid import read_spec, spec_from_table
 from quadnav.batch.stages import StageCache
 from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
 from quadnav.control.registry import controller_gains
-from quadnav.trajectory.clearance.space import reference_margins, trajectory_margins
+from quadnav.planning.legs import leg_world
+from quadnav.sim.collision import body_grid
+from quadnav.trajectory.clearance.space import (
+    SafeSpace,
+    reference_margins,
+    trajectory_margins,
+)
 from quadnav.tune.sets import read_set, set_items
 from quadnav.vehicle.params import load_params
 from quadnav.world import load_world
@@ -291,6 +297,19 @@ def test_a_world_inflates_and_labels_its_free_space_once_per_margin():
     assert "_inflated" not in pickle.loads(pickle.dumps(world)).__dict__
     assert np.array_equal(unblocked_components(fresh, 1000)[0], labels)
     assert not disconnected(inflated, world.start, world.goal, 1000)
+
+
+def test_a_map_grows_its_blocks_for_a_body_and_for_legs_once():
+    world = load_world(WINDOW)
+    half = np.array([0.1, 0.1, 0.05])
+    grid = body_grid(world, half)
+    legs = SafeSpace(world, 0.2).legs_world
+
+    assert body_grid(world, half.copy()) is grid and body_grid(world, 2 * half) is not grid
+    assert np.array_equal(grid[0], body_grid(load_world(WINDOW), half)[0])
+    assert SafeSpace(world, 0.3).legs_world is legs
+    assert np.array_equal(legs.blocks, leg_world(world).blocks)
+    assert np.array_equal(legs.boundary, leg_world(world).boundary)
 
 
 def test_missions_that_fly_one_trajectory_measure_its_margins_once(spec_path):

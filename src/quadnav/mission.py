@@ -37,6 +37,7 @@ from quadnav.planning.refine import refine
 from quadnav.planning.result import Progress, path_length
 from quadnav.planning.stall import StallRule
 from quadnav.plugins import parse_spec
+from quadnav.profiling import staged
 from quadnav.sim.flight import Ending, Flight
 from quadnav.sim.settings import SimSettings
 from quadnav.sim.simulate import simulate
@@ -277,6 +278,7 @@ class Mission:
                               self.settings.sim, self.problem.margin)
 
 
+@staged("metrics")
 def measure_flight(world: World, trajectory: Trajectory | FlatOutputReference, flight: Flight,
                    settings: SimSettings, margin: float) -> dict:
     """The flight's part of :meth:`Mission.metrics`: the margin (per axis, m) kept from the
@@ -450,6 +452,7 @@ def fly_plan(planned: Mission, settings: MissionSettings | None = None,
                          flight_progress)
 
 
+@staged("trajectory")
 def make_reference(problem: PlanningProblem, path: FloatArray, settings: MissionSettings
                    ) -> tuple[Trajectory | FlatOutputReference, MissionSettings]:
     """The reference flown along ``path`` (N, 3) m, a solved plan's, and ``settings`` with

@@ -34,6 +34,7 @@ import numpy as np
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output, csv_text
 from quadnav.limits import MAX_SPEED
+from quadnav.profiling import staged
 
 if TYPE_CHECKING:
     from quadnav.batch.grid import MissionSpec
@@ -95,6 +96,7 @@ RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
 
 
+@staged("row")
 def mission_row(mission: MissionSpec, factors: tuple[float, float, float], drawn: bool,
                 flown: Mission | None, error: str | None = None,
                 start: np.ndarray | None = None, goal: np.ndarray | None = None,

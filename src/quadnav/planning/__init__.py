@@ -19,6 +19,7 @@ from quadnav.planning.registry import get_planner, planner_names, register_plann
 from quadnav.planning.result import PlanResult, PlanStats, PostStep, Progress, path_length
 from quadnav.planning.settings import PlannerSettings
 from quadnav.planning.stall import StallRule
+from quadnav.profiling import staged
 
 __all__ = [
     "PlainPlanner",
@@ -39,6 +40,7 @@ __all__ = [
 ]
 
 
+@staged("search")
 def plan(problem: PlanningProblem, settings: PlannerSettings | None = None,
          planner: str = "rrtstar", progress: Progress | None = None) -> PlanResult:
     """Plan a path for ``problem`` with the planner called ``planner``.

@@ -33,6 +33,7 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import PlanningWarning, QuadnavError
 from quadnav.planning.legs import BODY_ROOM, body_inside, body_reach, find_leg
 from quadnav.planning.result import path_length
+from quadnav.profiling import staged
 from quadnav.world.connectivity import disconnected
 from quadnav.world.model import World
 from quadnav.world.placement import classify_point, format_box, format_point
@@ -123,6 +124,7 @@ class PlanningProblem:
         return points[head:len(points) - tail]
 
 
+@staged("query")
 def make_problem(world: World, start: ArrayLike | None, goal: ArrayLike | None,
                  margin: float, body: ArrayLike = (0.0, 0.0, 0.0)) -> PlanningProblem:
     """Check a query and prepare it for planners; raises QuadnavError for bad input.

@@ -35,6 +35,7 @@ from quadnav.planning.rrtstar_kernel import (
 )
 from quadnav.planning.settings import PlannerSettings
 from quadnav.planning.stall import StallWatch
+from quadnav.profiling import stage
 from quadnav.world.model import World
 
 #: Name of this planner in results and on the command line.
@@ -184,7 +185,9 @@ def _search(problem: PlanningProblem, settings: PlannerSettings,
         end = limit if watch is None else min(limit, watch.next_check)
         chunk = int(min(chunk, end - counts[ITERATIONS], len(tree.cost) - counts[NODES]))
         began = time.perf_counter()
-        grow(rng, chunk, bool(best[BEST_VERTEX] < 0), query, tree)
+        unsolved = bool(best[BEST_VERTEX] < 0)
+        with stage("first path" if unsolved else "improvement"):
+            grow(rng, chunk, unsolved, query, tree)
         if time.perf_counter() - began < CHUNK_SECONDS:
             chunk = min(2 * chunk, _MAX_CHUNK)
     count = int(counts[NODES])

@@ -17,6 +17,7 @@ from quadnav.arrays import FloatArray
 from quadnav.errors import QuadnavError
 from quadnav.planning.refine_kernel import line_of_sight, random_shortcuts
 from quadnav.planning.result import path_length
+from quadnav.profiling import staged
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
@@ -59,6 +60,7 @@ def free_polyline(world: World, path: ArrayLike) -> FloatArray:
     return points
 
 
+@staged("shortcut")
 def shortcut_path(world: World, path: ArrayLike, seed: int = 0,
                   attempts: int | None = None) -> FloatArray:
     """A path no longer than ``path`` with the same endpoints, every segment free.

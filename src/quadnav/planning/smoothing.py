@@ -23,6 +23,7 @@ from quadnav.config import require
 from quadnav.planning.refine_kernel import simplified, smoothing_sweeps
 from quadnav.planning.result import IntArray, path_length
 from quadnav.planning.shortcut import free_polyline, polyline_segments
+from quadnav.profiling import staged
 from quadnav.world.model import World
 
 #: Default ``max_spacing``: the path length divided by this many pieces.
@@ -33,6 +34,7 @@ DEFAULT_PIECES = 100
 KEEP_DEVIATION_FRACTION = 0.02
 
 
+@staged("smoothing")
 def smooth_path(world: World, path: ArrayLike, weight_data: float = 0.5,
                 weight_smooth: float = 0.3, tolerance: float = 1e-6,
                 max_spacing: float | None = None, max_sweeps: int = 1000) -> FloatArray:

@@ -13,6 +13,7 @@ body, and every such block is registered in the cell holding the centre.
 from __future__ import annotations
 
 import math
+from weakref import WeakKeyDictionary
 
 import numpy as np
 from numba import njit
@@ -24,13 +25,22 @@ from quadnav.world.model import World
 _PARALLEL_EPSILON = 1e-12
 
 
+#: The grids :func:`body_grid` made, by world and circumradius (m).
+_BODY_GRIDS: WeakKeyDictionary[World, dict[float, GridArrays]] = WeakKeyDictionary()
+
+
 def body_grid(world: World, half_size: np.ndarray) -> GridArrays:
     """Block grid of ``world``'s blocks grown by the circumradius of a box of half sizes
     ``half_size`` (3,) m. Its block coordinates (row 0 of the tuple) are the grown ones;
-    pass the real blocks separately to :func:`touched_block`."""
+    pass the real blocks separately to :func:`touched_block`. Made once per world and
+    circumradius while the world lives (a world is immutable): the flights of a batch on
+    one map share it."""
     radius = float(np.linalg.norm(half_size))
-    grow = np.array([-radius] * 3 + [radius] * 3)
-    return build_block_grid(world.replace(blocks=world.blocks + grow))
+    kept = _BODY_GRIDS.setdefault(world, {})
+    if radius not in kept:
+        grow = np.array([-radius] * 3 + [radius] * 3)
+        kept[radius] = build_block_grid(world.replace(blocks=world.blocks + grow))
+    return kept[radius]
 
 
 @njit(cache=True)

@@ -44,6 +44,7 @@ from quadnav.control.contract import (
 from quadnav.control.gains import Gains
 from quadnav.control.registry import DEFAULT_CONTROLLER, make_controller
 from quadnav.limits import MAX_CONTROL_STEPS, MAX_PHYSICS_STEPS, check_count, check_duration
+from quadnav.profiling import staged
 from quadnav.sim import loop
 from quadnav.sim.excursion import Excursion, body_excursion
 from quadnav.sim.flight import Ending, Flight
@@ -133,6 +134,7 @@ def _disturbances(settings: SimSettings, steps: int, dt: float) -> tuple[FloatAr
     return forces, noise
 
 
+@staged("simulation")
 def simulate(trajectory: Reference, params: VehicleParams | None = None,
              gains: Gains | None = None, world: World | None = None,
              settings: SimSettings | None = None,

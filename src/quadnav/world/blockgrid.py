@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit, prange
 
+from quadnav.profiling import staged
 from quadnav.world.geometry import _inverses, _slab_entry_exit, _strictly_inside
 
 if TYPE_CHECKING:
@@ -46,6 +47,7 @@ _ROUNDING = 1e-9
 GridArrays = tuple
 
 
+@staged("block grid")
 def build_block_grid(world: World) -> GridArrays:
     """The block grid of ``world`` (see :data:`GridArrays`)."""
     blocks = world.blocks

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from quadnav.arrays import FloatArray
+from quadnav.profiling import stage, staged
 from quadnav.world.model import World
 
 #: Voxel budget for the default resolution.
@@ -81,6 +82,7 @@ def connected(
     return bool(labels[tuple(cells[0])] == labels[tuple(cells[1])])
 
 
+@staged("proof")
 def disconnected(world: World, start: ArrayLike, goal: ArrayLike,
                  max_voxels: int = 1_000_000) -> bool:
     """Whether ``start`` and ``goal`` are provably in different parts of free space.
@@ -114,18 +116,24 @@ def unblocked_components(world: World, max_voxels: int) -> tuple[NDArray[np.int3
     immutable): the missions of a batch on one map and margin share them."""
     kept = _COMPONENTS.setdefault(world, {})
     if max_voxels not in kept:
-        shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)
-                                   - _ROUNDING), 1).astype(np.int64)
-        voxel = world.extent / shape
-        # Voxel i is inside [lo, hi] when lo <= origin + i v and origin + (i + 1) v <= hi;
-        # rounding shrinks the index range, so it can only leave more voxels unblocked.
-        first = np.ceil((world.blocks[:, :3] - world.lower) / voxel + _ROUNDING)
-        last = np.floor((world.blocks[:, 3:] - world.lower) / voxel - 1 - _ROUNDING)
-        blocked = _covered(first.astype(np.int64), last.astype(np.int64), shape)
-        labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3), dtype=bool))
-        labels.flags.writeable = False
-        kept[max_voxels] = labels, voxel
+        with stage("proof labels"):
+            kept[max_voxels] = _labelled(world, max_voxels)
     return kept[max_voxels]
+
+
+def _labelled(world: World, max_voxels: int) -> tuple[NDArray[np.int32], FloatArray]:
+    """The components of :func:`unblocked_components`, labelled."""
+    shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)
+                               - _ROUNDING), 1).astype(np.int64)
+    voxel = world.extent / shape
+    # Voxel i is inside [lo, hi] when lo <= origin + i v and origin + (i + 1) v <= hi;
+    # rounding shrinks the index range, so it can only leave more voxels unblocked.
+    first = np.ceil((world.blocks[:, :3] - world.lower) / voxel + _ROUNDING)
+    last = np.floor((world.blocks[:, 3:] - world.lower) / voxel - 1 - _ROUNDING)
+    blocked = _covered(first.astype(np.int64), last.astype(np.int64), shape)
+    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3), dtype=bool))
+    labels.flags.writeable = False
+    return labels, voxel
 
 
 def _occupied(

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from quadnav.arrays import FloatArray, read_only
 from quadnav.errors import QuadnavError
 from quadnav.limits import MARGIN, MAX_BLOCKS, WORLD_COORDINATE
+from quadnav.profiling import stage
 from quadnav.world import blockgrid, geometry, volume
 
 #: Boxes the exact free volume may visit (30-90 ns each) before it is estimated instead.
@@ -217,7 +218,8 @@ class World:
                 f"{self.name}: margin {margin:g} m leaves no free space in a boundary of size "
                 f"{' x '.join(f'{e:g}' for e in self.extent)} m"
             )
-        kept[margin] = self.replace(boundary=boundary, blocks=self.blocks + grow)
+        with stage("inflated world"):
+            kept[margin] = self.replace(boundary=boundary, blocks=self.blocks + grow)
         if len(kept) > KEPT_INFLATIONS:
             del kept[next(iter(kept))]
         return kept[margin]

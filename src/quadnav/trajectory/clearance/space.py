@@ -36,6 +36,9 @@ from quadnav.world.margins import box_margins, rounded, segment_box_margins
 from quadnav.world.model import World
 from quadnav.world.placement import format_point
 
+#: :attr:`SafeSpace.legs_world` of each map.
+_LEGS_WORLDS: WeakKeyDictionary[World, World] = WeakKeyDictionary()
+
 
 @dataclass(frozen=True, eq=False)
 class SafeSpace:
@@ -54,10 +57,14 @@ class SafeSpace:
         """The map inflated by the margin: everything but the legs stays in its free space."""
         return self.world.inflate(self.margin)
 
-    @cached_property
+    @property
     def legs_world(self) -> World:
-        """Where legs may go: off every real block, inside the closed boundary."""
-        return leg_world(self.world)
+        """Where legs may go: off every real block, inside the closed boundary (made once
+        per map while it lives, with its block grid: the trajectories of a batch on one
+        map share it)."""
+        if self.world not in _LEGS_WORLDS:
+            _LEGS_WORLDS[self.world] = leg_world(self.world)
+        return _LEGS_WORLDS[self.world]
 
     def split(self, waypoints: ArrayLike) -> tuple[int, int]:
         """``(head, tail)``: ``waypoints[:head + 1]`` is the start leg and

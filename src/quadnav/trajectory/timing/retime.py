@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from quadnav.arrays import FloatArray
+from quadnav.profiling import staged
 from quadnav.trajectory.feasibility import Limits, quantities
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.timing.segment_times import rest_to_rest_distance, rest_to_rest_duration
@@ -136,6 +137,7 @@ def profile_times(trajectory: Trajectory, v_max: float, a_max: float) -> FloatAr
     return np.diff(passing[::SAMPLES_PER_SEGMENT]) * np.minimum(1.0, chords / stretches)
 
 
+@staged("fastest timing")
 def fastest_times(points: FloatArray, times: FloatArray, build: Build, v_max: float,
                   a_max: float) -> FloatArray:
     """Segment times (N - 1,), s, for ``points`` (N, 3) that fly ``build``'s curve as fast
@@ -176,6 +178,7 @@ def segment_excess(trajectory: Trajectory, v_max: float, a_max: float,
     return np.maximum(per_segment, ends)
 
 
+@staged("fastest timing")
 def stretch_where_fast(trajectory: Trajectory, build: Build, v_max: float, a_max: float,
                        vehicle: Limits | None = None) -> Trajectory:
     """``trajectory`` rebuilt with longer times where it exceeds a limit (see
