@@ -24,6 +24,7 @@ from quadnav.files import atomic_output
 from quadnav.pages import figure, render
 from quadnav.runs import DRIFT_FIGURE, Run, run_outcome
 from quadnav.tracking import step_summary
+from quadnav.viz.figures import write_png
 from quadnav.viz.flight_figures import figure_makers
 from quadnav.world.placement import format_estimate, format_point
 
@@ -100,9 +101,9 @@ def _png(run: Run, name: str, make: Callable[[Run], Figure]) -> bytes:
 
 
 def png_bytes(fig: Figure) -> bytes:
-    """``fig`` as PNG bytes."""
+    """``fig`` as PNG bytes (:func:`~quadnav.viz.figures.write_png`)."""
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png")
+    write_png(fig, buffer)
     return buffer.getvalue()
 
 

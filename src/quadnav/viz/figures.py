@@ -8,9 +8,12 @@ import gc
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import BinaryIO
 
+import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from PIL import Image
 
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
@@ -18,6 +21,9 @@ from quadnav.files import atomic_output
 #: Resolution of the figures, dots per inch: they are drawn to be shown about 1100 pixels
 #: wide (the report's width).
 DPI = 120
+#: zlib level of a PNG file: at 3 the four figures of ``quadnav fly`` encode in 0.11 s of
+#: CPU instead of 0.14 s at 6 (PIL's and matplotlib's default), in files under 1 % larger.
+PNG_COMPRESSION = 3
 
 
 def new_figure(size: tuple[float, float]) -> Figure:
@@ -40,11 +46,29 @@ def check_figure_path(path: str | Path) -> str:
     return suffix
 
 
+def write_png(fig: Figure, target: str | Path | BinaryIO) -> None:
+    """Draw ``fig`` once and write it to ``target`` (a file name or a binary file) as a
+    PNG image of its pixels at its dpi: RGB when it is opaque (as every figure with
+    matplotlib's default white face is: a quarter fewer bytes to compress than the RGBA
+    that ``savefig`` writes), else RGBA, at :data:`PNG_COMPRESSION`. A figure made
+    without an Agg canvas (not by :func:`new_figure`) is given one."""
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    canvas.draw()
+    image = Image.fromarray(np.asarray(canvas.buffer_rgba()))
+    if image.getextrema()[3][0] == 255:
+        image = image.convert("RGB")
+    image.save(target, format="png", compress_level=PNG_COMPRESSION, dpi=(fig.dpi, fig.dpi))
+
+
 def save_figure(fig: Figure, path: str | Path) -> None:
-    """Save ``fig``; the file at ``path`` is either complete or untouched."""
+    """Save ``fig`` (a PNG with :func:`write_png`); the file at ``path`` is either
+    complete or untouched."""
     fmt = check_figure_path(path)
     with atomic_output(path) as tmp:
-        fig.savefig(tmp, format=fmt)
+        if fmt == "png":
+            write_png(fig, tmp)
+        else:
+            fig.savefig(tmp, format=fmt)
 
 
 @contextmanager
