@@ -1,7 +1,8 @@
 """A small batch for the batch tests: 2 maps (a built-in world with its own start and goal,
 and a map file without, whose start and goal each seed draws) x 3 seeds at 2 m/s, with a
 short search budget; and its rows flown one by one in this process. And a batch whose
-planner kills its worker process, once for one mission and every time for another."""
+planner kills its worker process, once for one mission and every time for another; and
+one whose planner stalls on one node of a Ray cluster."""
 
 from __future__ import annotations
 
@@ -83,14 +84,49 @@ def write_killer_spec(folder: Path) -> Path:
     """A spec of :data:`KILLER_MISSIONS` missions in a room without blocks (a start and
     goal drawn per seed) planned by :data:`KILLER`, whose marker is ``folder``/killed;
     returns the spec's path."""
+    return _write_room_spec(folder, "killer", KILLER,
+                            f"once={KILLED_ONCE}, always={KILLED_ALWAYS}, "
+                            f"marker='{folder / 'killed'}'")
+
+
+#: A plain planner (a straight path, as :data:`KILLER`'s) that, in a process of the test
+#: cluster's node ``node`` (named by its QUADNAV_TEST_NODE, tests/raycluster.py), writes
+#: the node's name and its process id in the file ``marker`` and then sleeps until killed.
+STALLER = '''\
+import os
+import time
+
+import numpy as np
+
+
+def plan(world, start, goal, margin, seed=0, node="", marker=""):
+    if os.environ.get("QUADNAV_TEST_NODE") == node:
+        with open(marker + ".part", "w") as part:
+            part.write(f"{node} {os.getpid()}")
+        os.replace(marker + ".part", marker)
+        while True:
+            time.sleep(60)
+    return np.array([start, goal])
+'''
+
+
+def write_staller_spec(folder: Path, node: str) -> Path:
+    """The missions of :func:`write_killer_spec` planned by :data:`STALLER`, stalling on
+    ``node``, whose marker is ``folder``/stalled; returns the spec's path."""
+    return _write_room_spec(folder, "staller", STALLER,
+                            f"node='{node}', marker='{folder / 'stalled'}'")
+
+
+def _write_room_spec(folder: Path, planner: str, source: str, arguments: str) -> Path:
+    """A spec of :data:`KILLER_MISSIONS` missions in a room without blocks (a start and
+    goal drawn per seed) planned by the function ``plan`` of ``source``, written in
+    ``folder`` as the file ``planner``.py, called with ``arguments``; returns its path."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "room.txt").write_text("boundary 0 0 0 6 6 3\n")
-    (folder / "killer.py").write_text(KILLER)
-    marker = folder / "killed"
+    (folder / f"{planner}.py").write_text(source)
     path = folder / "spec.toml"
     path.write_text(f"seeds = {KILLER_MISSIONS}\nspeeds = [2.0]\nmaps = [\"room.txt\"]\n"
-                    f"planners = [\"killer.py:plan(once={KILLED_ONCE}, "
-                    f"always={KILLED_ALWAYS}, marker='{marker}')\"]\n")
+                    f"planners = [\"{planner}.py:plan({arguments})\"]\n")
     return path
 
 
