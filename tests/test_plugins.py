@@ -183,3 +183,31 @@ def test_a_registry_loads_entry_points_once_and_keeps_builtins_first():
     assert registry.names() == ["a", "b", "c"] and "c" in registry and "d" not in registry
     with pytest.raises(QuadnavError, match=r"^unknown thing 'd'; expected one of a, b, c$"):
         registry.get("d")
+
+
+#: A controller file that a real stop signal cuts short as it loads: the signal arrives
+#: while a class is made, where Python 3.11 wraps the stop in a RuntimeError.
+CUT_SHORT = '''\
+import os
+import signal
+
+
+class Cut:
+    def __set_name__(self, owner, name):
+        os.kill(os.getpid(), signal.SIGTERM)
+        sum(range(1000))  # the stop is raised here, inside __set_name__
+
+
+class Follow:
+    cut = Cut()
+'''
+
+
+def test_a_stop_while_a_plugin_loads_is_a_stop_not_a_broken_plugin(tmp_path):
+    (tmp_path / "cut.py").write_text(CUT_SHORT)
+    result = subprocess.run(
+        [sys.executable, "-m", "quadnav", "track", "hover:duration=1", "--controller",
+         f"{tmp_path / 'cut.py'}:Follow", "--no-figures", "-o", str(tmp_path / "out")],
+        capture_output=True, text=True, timeout=120)
+    assert (result.returncode, result.stderr) == (143, "quadnav: stopped by SIGTERM\n")
+    assert not (tmp_path / "out").exists()

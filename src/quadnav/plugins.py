@@ -39,6 +39,7 @@ import numpy as np
 
 from quadnav.errors import QuadnavError
 from quadnav.inputfiles import special_file
+from quadnav.signals import interrupt_behind
 
 Plugin = TypeVar("Plugin")
 #: quadnav's own folder: frames in it are left out of a plug-in's traceback.
@@ -175,6 +176,7 @@ class Registry(Generic[Plugin]):
         try:
             return point.load()
         except Exception as error:
+            _stop_behind(error)
             raise PluginError(f"{self.kind} {name!r} from package entry point {point.value} "
                               f"could not be loaded: {type(error).__name__}: {error}",
                               details=user_traceback(error)) from None
@@ -330,7 +332,19 @@ def _load_file(path: str, kind: str) -> ModuleType:
     return module
 
 
+def _stop_behind(error: Exception) -> None:
+    """Raise the Ctrl-C or stop signal that cut a plug-in's loading short and became
+    ``error`` (the RuntimeError of a class whose ``__set_name__`` it interrupted, an
+    import's ImportError): a stop, not a broken plug-in."""
+    interrupt = interrupt_behind(error)
+    if interrupt is not None:
+        raise interrupt
+
+
 def _raised_while_loading(where: str, kind: str, error: Exception) -> PluginError:
+    """The error of a plug-in that raised ``error`` while it loaded (a stop behind it is
+    raised instead: :func:`_stop_behind`)."""
+    _stop_behind(error)
     return PluginError(f"{kind} {where}: {type(error).__name__} while loading it: {error}",
                        details=user_traceback(error))
 

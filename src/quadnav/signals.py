@@ -71,12 +71,13 @@ def report_interrupt(interrupt: KeyboardInterrupt) -> int:
     return interrupted_exit_code(interrupt)
 
 
-def report_stop(error: KeyboardInterrupt | ImportError,
-                raised: KeyboardInterrupt | None = None) -> int:
+def report_stop(error: BaseException, raised: KeyboardInterrupt | None = None) -> int:
     """Say on one line that the run was stopped, and return the exit code, when ``error``
-    is a Ctrl-C or stop signal or an import it interrupted (its cause, or ``raised``: the
-    stop the handlers raised during the import, which some extension modules' ImportError
-    no longer names); otherwise raise it again."""
+    is a Ctrl-C or stop signal or what it became in the code it cut short (its cause or
+    context: an import's ImportError, the RuntimeError of a class whose ``__set_name__``
+    it interrupted), or comes with ``raised``: the stop the handlers raised during an
+    import, which some extension modules' ImportError no longer names; otherwise raise
+    ``error`` again."""
     interrupt = interrupt_behind(error) or raised
     if interrupt is None:
         raise error

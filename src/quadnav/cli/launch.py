@@ -72,8 +72,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if command_in(sys.argv[1:] if argv is None else argv) is not None:
             watch_kernel_loads()  # a command runs: it loads compiled kernels (--help does not)
         from quadnav.cli.main import main as run_command_line
-    except (KeyboardInterrupt, ImportError) as error:
-        return report_stop(error, _stop_handler.raised)
+    except (KeyboardInterrupt, Exception) as error:  # a stop in an import, however wrapped
+        return report_stop(error, _stop_handler.raised if isinstance(error, ImportError)
+                           else None)
     return run_command_line(argv)
 
 

@@ -90,7 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(details, file=sys.stderr)
         print(f"quadnav: error: {error}", file=sys.stderr)
         return getattr(error, "exit_code", EXIT_USAGE)
-    except (KeyboardInterrupt, ImportError) as error:  # a stop during a lazy import too
+    except (KeyboardInterrupt, Exception) as error:  # a stop in a lazy import, however wrapped
         return report_stop(error)
 
 
