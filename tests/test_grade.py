@@ -20,6 +20,8 @@ from pathlib import Path
 import pytest
 from clitools import QUADNAV, run_here
 
+from quadnav.batch.executor import RETRIES
+
 #: One worker for the module, so that its module-scoped fixtures are built once under
 #: --dist loadgroup (each test apart would build them on each worker).
 pytestmark = pytest.mark.xdist_group("grade")
@@ -51,6 +53,8 @@ simulation = {{control_rate = 250.0}}
 #: A student's planner that imports a file of the submission by module name: the straight
 #: line on the map of two pillars (through one of them), else the example's graph search.
 PLANNER = """
+import os
+import signal
 import time
 
 import numpy as np
@@ -70,6 +74,12 @@ def search(world, start, goal, margin):
 def stuck_in_the_forest(world, start, goal, margin):
     while len(world.blocks) != 2:  # until the grade is stopped
         time.sleep(0.05)
+    return search(world, start, goal, margin)
+
+
+def killed_on_pillars(world, start, goal, margin):
+    if len(world.blocks) == 2:  # as a crash in compiled code or the OOM killer would
+        os.kill(os.getpid(), signal.SIGKILL)
     return search(world, start, goal, margin)
 """
 #: A student's controllers: the example's PD law, one that raises after 0.5 s, one that
@@ -122,6 +132,9 @@ class WrongKeys(PDAttitude):
 #: The flags that grade a course on its first map alone, double_pillar, with its query.
 PILLAR_ONLY = ["--maps", "course:rotorpy/double_pillar", "--start", "-1.1", "-3", "1",
                "--goal", "-1.1", "3", "1.5"]
+#: The flags that grade a course on its second map alone, grid_forest, with its query.
+FOREST_ONLY = ["--maps", "course:meam620/grid_forest", "--start", "1.25", "1.25", "1",
+               "--goal", "3.25", "5.25", "1.5"]
 
 
 def submission(folder: Path, tag: str) -> Path:
@@ -337,6 +350,43 @@ def test_a_part_that_calls_exit_fails_its_mission_not_the_grader(tmp_path):
         assert 'File "controller.py", line ' in row["traceback"]
 
 
+def test_a_part_that_kills_its_process_fails_its_mission_and_the_grade_goes_on(tmp_path):
+    # in a process of its own: a grader that flew the mission itself would be killed
+    student = submission(tmp_path / "jay", "killed")
+    spec = course(tmp_path, 1, "Good", "killed_on_pillars")
+    out = tmp_path / "out"
+    result = subprocess.run([*QUADNAV, "grade", student, "--course", spec, "--no-baseline",
+                             "-o", out], capture_output=True, text=True, timeout=600)
+    assert result.returncode == 1, result.stderr
+    reason = f"its worker process died {RETRIES + 1} times (killed by SIGKILL); given up"
+    assert f"  submission rotorpy-double_pillar/seed-0: FAIL (process died): {reason}\n" in (
+        result.stdout)
+    assert "score: 1 of 2 missions passed" in result.stdout
+    grade = grade_json(out)
+    assert grade["complete"]
+    pillars, forest = (m["submission"] for m in grade["missions"])
+    assert (pillars["outcome"], pillars["reason"]) == ("process died", reason)
+    assert forest["passed"], forest["reason"]
+    folder = out / pillars["folder"]
+    assert (folder / "error.txt").read_text() == reason + "\n"
+    assert not (folder / "grade-result.json").exists()  # a re-run flies it again
+    assert reason in (out / "grade.html").read_text()
+
+
+def test_a_mission_past_the_time_limit_is_stopped_and_fails(tmp_path):
+    student = submission(tmp_path / "kim", "stuck")
+    spec = course(tmp_path, 1, "Good", "stuck_in_the_forest")
+    result = run_here("grade", student, "--course", spec, *FOREST_ONLY, "--no-baseline",
+                      "--mission-time-limit", "3", "-o", tmp_path / "out")
+    assert result.returncode == 1, result.stderr
+    assert "score: 0 of 1 missions passed" in result.stdout
+    grade = grade_json(tmp_path / "out")
+    row = grade["missions"][0]["submission"]
+    assert grade["complete"] and grade["course"]["mission_time_limit"] == 3
+    assert (row["outcome"], row["reason"]) == ("time limit",
+                                               "ran longer than the 3 s limit; stopped")
+
+
 def test_a_missing_file_is_the_submissions_failure(tmp_path):
     student = tmp_path / "erin"
     student.mkdir()
@@ -366,8 +416,10 @@ def test_a_missing_file_is_the_submissions_failure(tmp_path):
     ("seeds = 0\nmaps = ['forest']\n", [".", "--course", "g.toml"],
      "g.toml:1: seeds: expected a whole number from 1 to 1,000, got 0"),
     ("maps = ['forest']\nsped = 3\n", [".", "--course", "g.toml"],
-     "g.toml:2: sped: unknown key; expected one of maps, seeds, strict, baseline, parts, "
-     "mission"),
+     "g.toml:2: sped: unknown key; expected one of maps, seeds, strict, baseline, "
+     "mission_time_limit, parts, mission"),
+    ("maps = ['forest']\nmission_time_limit = 'long'\n", [".", "--course", "g.toml"],
+     "g.toml:2: mission_time_limit: expected from 0 to 86,400 s, got 'long'"),
     ("maps = ['forest']\n[mission]\nmap = 'window'\n", [".", "--course", "g.toml"],
      "g.toml:2: mission: map is set for each mission by the course's maps and seeds; give "
      "maps = [...] (with start, goal, margin) and seeds instead"),
@@ -385,4 +437,15 @@ def test_bad_grader_input_is_one_line_and_exit_2(tmp_path, setup, args, message)
     assert result.returncode == 2, result.stdout
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"quadnav: error: {message}"), lines
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("limit", ["-1", "long"])
+def test_a_bad_time_limit_is_one_line_and_exit_2(tmp_path, limit):
+    result = run_here("grade", ".", "--maps", "forest", "--controller", "c.py:C",
+                      "--mission-time-limit", limit, "-o", "out", cwd=tmp_path)
+    assert result.returncode == 2, result.stdout
+    assert result.stderr.splitlines() == [
+        "quadnav grade: error: argument --mission-time-limit: expected from 0 to 86,400 s, "
+        f"got '{limit}' (see quadnav grade --help)"]
     assert not (tmp_path / "out").exists()

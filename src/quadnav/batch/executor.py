@@ -19,15 +19,20 @@ ignore Ctrl-C, SIGTERM and SIGHUP: the parent handles them and
 
 A worker process that dies (killed by a signal or the OOM killer, a crash in compiled
 code, ``os._exit`` in a plug-in) loses only the job it ran: a new worker takes its place
-and the job runs again, at most :data:`RETRIES` times; a job whose worker dies every time
-is then given up, its result ``lost(item, reason)`` (:meth:`Executor.map_unordered`). A job
-of several parts (``split(item)``: a batch's missions that share a plan) runs again as its
-parts, one job each, so that a part that kills its worker every time is the only one given
-up. A
-worker that dies before it has started (in its warm-up) is an error at once
-(:class:`WorkerDiedError`): another would die the same way.
-Each executor counts the jobs run again (:attr:`~_Base.retried`). A job's result depends
-only on its ``shared`` and ``item``, so a job run again gives the same result.
+(started when a job needs it) and the job runs again, at most :data:`RETRIES` times; a job
+whose worker dies every time is then given up, its result ``lost(item, reason)``
+(:meth:`Executor.map_unordered`). A job of several parts (``split(item)``: a batch's
+missions that share a plan) runs again as its parts, one job each, so that a part that
+kills its worker every time is the only one given up. A worker that dies before it has
+started (in its warm-up) is an error at once (:class:`WorkerDiedError`): another would die
+the same way.
+
+A job may be given a time limit (``time_limit`` of :meth:`LocalExecutor.map_unordered`,
+wall-clock seconds on its worker, its warm-up not counted): a job that runs longer (an
+endless loop in a plug-in) has its worker killed (SIGKILL) and replaced, and its result is
+``lost(item, reason)`` at once, not run again (it would run as long again). Each executor
+counts the jobs run again (:attr:`~_Base.retried`). A job's result depends only on its
+``shared`` and ``item``, so a job run again gives the same result.
 
 Each worker runs its numba kernels on the threads :func:`~quadnav.batch.threads.numba_threads`
 gives (one per worker unless a single local worker has the machine), set in the worker
@@ -98,12 +103,15 @@ class Executor(Protocol):
     retried_jobs: list[Any]
 
     def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
-                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
+                      split: Split | None = None, time_limit: float | None = None
+                      ) -> Iterator[tuple[int, Any]]:
         """``(index, function(shared, items[index]))`` for every item, as each finishes.
         A job whose worker process dies is run again, at most :data:`RETRIES` times; then
         its result is ``lost(item, reason)`` (WorkerDiedError without ``lost``). With
         ``split``, a job of several parts runs again as one job per part instead, each
-        part's index counting on from ``len(items)`` (in :attr:`retried_jobs`' order)."""
+        part's index counting on from ``len(items)`` (in :attr:`retried_jobs`' order).
+        With ``time_limit`` (s, local workers only), a job that runs longer is stopped and
+        its result is ``lost(item, reason)`` (TimeLimitError without ``lost``)."""
 
     def close(self, cancel: bool = False) -> None:
         """Release the workers; with ``cancel``, at once, dropping unfinished jobs."""
@@ -162,6 +170,18 @@ class WorkerDiedError(QuadnavError):
     exit_code = 1
 
 
+class TimeLimitError(QuadnavError):
+    """A job that ran longer than its time limit, when the caller gave no ``lost``
+    result for it (exit code 1: a failed run, not bad input)."""
+
+    exit_code = 1
+
+
+def time_limit_reason(limit: float) -> str:
+    """Why a job stopped at the time limit of ``limit`` s was given up, in words."""
+    return f"ran longer than the {limit:g} s limit; stopped"
+
+
 class _Deaths:
     """The worker deaths of the jobs of one :meth:`Executor.map_unordered` call: its
     ``items``, the parts of jobs split after a death appended."""
@@ -196,6 +216,14 @@ class _Deaths:
         if self.lost is None:
             raise WorkerDiedError(f"a job's worker process died {RETRIES + 1} times ({cause}); "
                              "given up")
+        return self.lost(self.items[index], reason)
+
+    def timed_out(self, index: int, limit: float) -> Any:
+        """The result of job ``index``, stopped at the time limit of ``limit`` s:
+        ``lost(item, reason)``, or TimeLimitError without ``lost``."""
+        reason = time_limit_reason(limit)
+        if self.lost is None:
+            raise TimeLimitError(f"a job {reason}")
         return self.lost(self.items[index], reason)
 
 
@@ -331,13 +359,20 @@ class _Worker:
         theirs.close()
         self.job: int | None = None
         self.started = False
+        #: when the worker began its job (time.monotonic(), s); None while it warms up
+        self.began: float | None = None
 
     def run(self, index: int, function: Job, item: Any) -> None:
         """Send job ``index``: ``function(shared, item)``. A worker that died meanwhile is
         found by :meth:`receive`."""
         self.job = index
+        self.began = time.monotonic() if self.started else None
         with suppress(OSError):  # BrokenPipeError: it died
             self.connection.send((function, item))
+
+    def overran(self, limit: float | None, now: float) -> bool:
+        """Whether its job has run longer than ``limit`` s (None: no limit) at ``now``."""
+        return limit is not None and self.began is not None and now - self.began > limit
 
     def receive(self) -> tuple[bool, Any] | str | None:
         """The worker's answer to its job; None while it has not answered (noting that it
@@ -349,6 +384,7 @@ class _Worker:
                 if message != STARTED:
                     return message
                 self.started = True
+                self.began = time.monotonic()  # the job's time counts from here
         except (EOFError, OSError):
             return DIED
         return None if self.process.is_alive() else DIED
@@ -375,23 +411,34 @@ class LocalExecutor(_Base):
         super().__init__()
         _start_resource_tracker()
         self._arguments = (shared, warm_up, self.numba_threads, os.getpid())
-        self._pool = [_Worker(self._arguments) for _ in range(self.workers)]
+        #: the workers; None in the place of one that died, until a job needs it again
+        self._pool: list[_Worker | None] = [_Worker(self._arguments)
+                                            for _ in range(self.workers)]
 
     def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
-                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
+                      split: Split | None = None, time_limit: float | None = None
+                      ) -> Iterator[tuple[int, Any]]:
         todo = deque(range(len(items)))
         deaths = self._deaths(items, lost, split)
         items = deaths.items
-        while todo or any(worker.job is not None for worker in self._pool):
-            for worker in self._pool:
-                if worker.job is None and todo:
+        while todo or self._busy():
+            for place, worker in enumerate(self._pool):
+                if todo and (worker is None or worker.job is None):
+                    if worker is None:  # one that died: started again when needed only
+                        worker = self._pool[place] = _Worker(self._arguments)
                     index = todo.popleft()
                     worker.run(index, function, items[index])
-            busy = [worker for worker in self._pool if worker.job is not None]
-            wait_for([*(w.connection for w in busy), *(w.process.sentinel for w in busy)])
+            busy = self._busy()
+            wait_for([*(w.connection for w in busy), *(w.process.sentinel for w in busy)],
+                     _time_left(busy, time_limit))
             for worker in busy:
                 answer = worker.receive()
                 if answer is None:
+                    if worker.overran(time_limit, time.monotonic()):
+                        index, worker.job = worker.job, None
+                        worker.process.kill()
+                        self._drop(worker)
+                        yield index, deaths.timed_out(index, time_limit)
                     continue
                 index, worker.job = worker.job, None
                 if answer != DIED:
@@ -400,24 +447,39 @@ class LocalExecutor(_Base):
                 if not worker.started:  # not the job's doing: starting again would not help
                     raise WorkerDiedError("a worker process died as it started "
                                           f"({_end_of(worker.process)})")
-                cause = self._replace(worker)
+                cause = self._drop(worker)
                 again = deaths.run_again(index)
                 if again:
                     todo.extendleft(reversed(again))
                 else:
                     yield index, deaths.given_up(index, cause)
 
-    def _replace(self, worker: _Worker) -> str:
-        """Put a new worker in the place of ``worker``, which died; returns how it ended."""
+    def _busy(self) -> list[_Worker]:
+        """The workers running a job."""
+        return [worker for worker in self._pool if worker is not None and worker.job is not None]
+
+    def _drop(self, worker: _Worker) -> str:
+        """Take ``worker``, which died (or was killed), out of the pool, its place empty
+        until a job needs a worker there; returns how it ended."""
         cause = _end_of(worker.process)
         worker.connection.close()
-        self._pool[self._pool.index(worker)] = _Worker(self._arguments)
+        self._pool[self._pool.index(worker)] = None
         return cause
 
     def close(self, cancel: bool = False) -> None:
         for worker in self._pool:
-            worker.end(cancel)
+            if worker is not None:
+                worker.end(cancel)
         self._pool = []
+
+
+def _time_left(busy: list[_Worker], limit: float | None) -> float | None:
+    """Seconds until the first of the ``busy`` workers' jobs reaches ``limit`` s (at
+    least 0); None when none can (no limit, or none has begun its job)."""
+    begun = [worker.began for worker in busy if worker.began is not None]
+    if limit is None or not begun:
+        return None
+    return max(0.0, min(begun) + limit - time.monotonic())
 
 
 # --------------------------------------------------------------------------------- Ray
@@ -565,7 +627,12 @@ class RayExecutor(_Base):
         self._pending: dict[Any, int] = {}
 
     def map_unordered(self, function: Job, items: Sequence[Any], lost: Lost | None = None,
-                      split: Split | None = None) -> Iterator[tuple[int, Any]]:
+                      split: Split | None = None, time_limit: float | None = None
+                      ) -> Iterator[tuple[int, Any]]:
+        """As :meth:`Executor.map_unordered`, but with no time limit: a ``time_limit`` is
+        refused (QuadnavError), Ray's tasks being stopped only by cancelling them."""
+        if time_limit is not None:
+            raise QuadnavError("a time limit on each job is for local workers only, not Ray")
         ray = self._ray
         died = (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError,
                 ray.exceptions.LocalRayletDiedError)

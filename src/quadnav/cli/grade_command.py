@@ -17,7 +17,7 @@ from quadnav.cli.args import (
 from quadnav.cli.commands import command_help
 from quadnav.errors import QuadnavError
 from quadnav.grading import Grade, read_course
-from quadnav.grading.course import SEED_COUNT, Course
+from quadnav.grading.course import MISSION_TIME_LIMIT, SEED_COUNT, Course
 from quadnav.grading.grade_one import BASELINE, RESULT_FILE
 from quadnav.limits import Range
 from quadnav.missionconfig.checks import located
@@ -32,7 +32,8 @@ WORKERS = Range(1, 1024, whole=True)
 COURSE_FLAGS = {"seeds": ("--seeds", "seeds"), "controller": ("--controller", "parts.controller"),
                 "planner": ("--planner", "parts.planner"),
                 "reference": ("--reference", "parts.reference"),
-                "speed": ("--speed", "mission.trajectory.speed")}
+                "speed": ("--speed", "mission.trajectory.speed"),
+                "mission_time_limit": ("--mission-time-limit", "mission_time_limit")}
 
 
 def course_from(args: argparse.Namespace) -> Course:
@@ -101,7 +102,8 @@ def add_grade_command(subparsers: argparse._SubParsersAction) -> None:
                     "quadnav's own parts beside them (the baseline). Writes DIR/grade.html "
                     "(the score, the pass rule, what failed where and why, with the flight), "
                     "DIR/grade.json and DIR/grade.csv. A failure in the student's code "
-                    "fails its mission, with its traceback. A re-run into the same DIR flies "
+                    "fails its mission, with its traceback; so does code that ends its "
+                    "process or runs past the time limit. A re-run into the same DIR flies "
                     "only the missions not finished (or whose files changed). Exit 0 when "
                     "every mission passed, 1 when one failed, 2 on bad input (the course, "
                     "the flags, a submission folder that is not there), 130/143 when "
@@ -129,13 +131,17 @@ def add_grade_command(subparsers: argparse._SubParsersAction) -> None:
                         "(rotorpy's shape), over the course's")
     p.add_argument("--speed", type=speed_or_max, metavar="V|max",
                    help="top speed of quadnav's trajectories, m/s, or max, over the course's")
+    p.add_argument("--mission-time-limit", type=number_in(MISSION_TIME_LIMIT),
+                   metavar="SECONDS",
+                   help="stop a mission that runs longer and fail it (an endless loop in "
+                        "the submission), over the course's (default: the course's, else "
+                        "300; 0: no limit)")
     p.add_argument("--strict", action="store_true",
                    help="a flight that kept less margin than asked off the legs fails too")
     p.add_argument("--no-baseline", action="store_true",
                    help="do not fly quadnav's own parts on the same missions")
     p.add_argument("--workers", type=number_in(WORKERS), default=1, metavar="N",
-                   help="missions flown at once on local worker processes (default: 1, in "
-                        "this process)")
+                   help="missions flown at once on local worker processes (default: 1)")
     p.add_argument("--quiet", action="store_true", help="no line per mission")
     p.add_argument("-o", "--output", type=output_path, default="grade", metavar="DIR",
                    help="folder to write into, created if needed (default: grade)")

@@ -8,6 +8,7 @@ A course file is TOML (see docs/grading.md)::
     seeds = 2                       # seeds 0 and 1 on every map; or a list [0, 4]
     strict = false                  # true: a flight that keeps less margin than asked fails
     baseline = true                 # fly quadnav's own parts on the same missions too
+    mission_time_limit = 300        # s a mission may run before it is stopped; 0: no limit
 
     [parts]                         # what each submission provides, in its own folder
     controller = "se3_control.py:SE3Control"
@@ -57,6 +58,10 @@ MISSION_OWN_KEYS = ("map", "seed", "query")
 SEED_COUNT = Range(1, 1000, whole=True)
 #: Seeds of a course that does not say.
 DEFAULT_SEEDS = 2
+#: The wall-clock seconds a mission may run (0: no limit), and the limit of a course that
+#: does not say: far longer than a mission takes (seconds), short enough that an endless
+#: loop in a submission costs a grade minutes, not hours.
+MISSION_TIME_LIMIT, DEFAULT_MISSION_TIME_LIMIT = Range(0, 86400, "s"), 300.0
 
 
 def _spec(kind: str):
@@ -115,6 +120,8 @@ class Course(Section):
         seeds: the seeds flown on every map.
         strict: a flight that kept less margin than asked off the legs fails too.
         baseline: fly quadnav's own parts on the same missions, to compare.
+        mission_time_limit: wall-clock seconds a mission may run (its flight, figures and
+            report) before it is stopped and fails; 0: no limit.
         parts: what each submission provides.
         mission: every other setting of the missions (a mission file's keys but ``map``,
             ``seed`` and ``query``).
@@ -125,6 +132,8 @@ class Course(Section):
         default_factory=lambda: list(range(DEFAULT_SEEDS)))
     strict: Annotated[bool, BeforeValidator(flag)] = False
     baseline: Annotated[bool, BeforeValidator(flag)] = True
+    mission_time_limit: Annotated[float, number(MISSION_TIME_LIMIT)] = \
+        DEFAULT_MISSION_TIME_LIMIT
     parts: Parts = Parts()
     mission: MissionConfig = MissionConfig()
 

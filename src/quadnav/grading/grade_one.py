@@ -8,6 +8,10 @@ part that cannot be loaded, raises, returns NaN commands or the wrong keys, or p
 a block fails that mission with the error's line and the part's own traceback
 (:data:`OUTCOMES`). The row is also kept in the mission's folder (:data:`RESULT_FILE`), so
 an interrupted grade keeps every mission finished and a re-run flies only the others.
+
+A mission flies in a worker process of the grade (:mod:`quadnav.grading.run`): one whose
+process died each time, or that ran past the time limit, gets its row from the grader
+instead (:func:`lost_row`), which is not kept: a re-run flies it again.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from quadnav.batch.executor import time_limit_reason
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
 from quadnav.grading.course import PART_KEYS
@@ -55,6 +60,10 @@ OUTCOMES = {
     "body outside": "the vehicle's body left the map",
     "missed goal": "the flight ended farther from the goal than the goal tolerance",
     "margin": "the flight kept less margin than asked off the legs (strict grading)",
+    "process died": "the process flying the mission died each time it flew it (os._exit, "
+                    "a crash in compiled code, killed by a signal or for want of memory)",
+    "time limit": "the mission ran longer than the course's time limit (an endless loop, "
+                  "a part far too slow)",
 }
 #: The figures of a mission, the first embedded in the grade for a failed mission.
 FIGURE = FIGURES[0]
@@ -184,6 +193,23 @@ def _error_row(job: GradeJob, error: BaseException) -> dict[str, Any]:
     return _base_row(job) | {"passed": False, "outcome": "part error", "reason": reason,
                              "traceback": details, "report": None, "figure": None,
                              "metrics": {}}
+
+
+def lost_row(context: GradeContext, time_limit: float | None, job: GradeJob, reason: str
+             ) -> dict[str, Any]:
+    """The row of ``job`` given up by the grader (``lost`` of
+    :meth:`~quadnav.batch.executor.Executor.map_unordered`, ``reason`` saying why): its
+    worker process died each time it flew it, or it ran past ``time_limit`` s. Its folder
+    gets :data:`ERROR_FILE` with the reason in place of what the worker left; no
+    :data:`RESULT_FILE`, so that a re-run flies it again."""
+    timed_out = time_limit is not None and reason == time_limit_reason(time_limit)
+    with replaced_folder(context.output / job.folder, (*RUN_FILES, ERROR_FILE, RESULT_FILE)
+                         ) as staging:
+        (staging / ERROR_FILE).write_text(reason + "\n", encoding="utf-8")
+    return _base_row(job) | {"passed": False,
+                             "outcome": "time limit" if timed_out else "process died",
+                             "reason": reason, "traceback": None, "report": None,
+                             "figure": None, "metrics": {}, "warnings": []}
 
 
 def _flown_row(job: GradeJob, mission: Mission, strict: bool) -> dict[str, Any]:

@@ -3,16 +3,21 @@
 The course is checked first with quadnav's own parts (every map read, every query and
 setting checked: a mistake there is the grader's input, refused before anything is
 written); then each mission flies with the submission's parts, and with quadnav's own
-(the baseline) unless the course says not to, serially or on the batch executor's local
-workers (:func:`~quadnav.batch.executor.open_executor`). Each mission keeps its row in its
-folder as it finishes; the grade's files (:func:`~quadnav.grading.report.write_grade`)
-are written at the end, and also when the run is stopped, from every mission finished.
+(the baseline) unless the course says not to, on the batch executor's local worker
+processes (:func:`~quadnav.batch.executor.open_executor`), one or more: whatever a
+submission's code does to its process (``os._exit``, a crash in compiled code, an endless
+loop) ends or stops only a worker, never the grader. A mission whose worker died each time
+it flew it, or that ran longer than the course's time limit, fails
+(:func:`~quadnav.grading.grade_one.lost_row`). Each mission keeps its row in its folder as
+it finishes; the grade's files (:func:`~quadnav.grading.report.write_grade`) are written
+at the end, and also when the run is stopped, from every mission finished.
 """
 
 from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Iterator
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +33,7 @@ from quadnav.grading.grade_one import (
     grade_mission,
     job_fingerprint,
     kept_row,
+    lost_row,
 )
 from quadnav.grading.report import write_grade
 
@@ -78,9 +84,9 @@ class Grade:
 
     def run(self, workers: int = 1, on_row: Callable[[dict[str, Any]], None] | None = None
             ) -> list[str]:
-        """Fly the missions still to fly (on ``workers`` local processes when more than
-        one), then write the grade's files; returns their names. A stop (Ctrl-C) or an
-        error still writes them from the missions finished, then goes on."""
+        """Fly the missions still to fly on ``workers`` local worker processes, then write
+        the grade's files; returns their names. A stop (Ctrl-C) or an error still writes
+        them from the missions finished, then goes on."""
         try:
             for row in self._flown(workers):
                 self.rows[row["part"], row["key"]] = row
@@ -92,12 +98,13 @@ class Grade:
         return written
 
     def _flown(self, workers: int) -> Iterator[dict[str, Any]]:
-        if workers <= 1 or len(self.todo) <= 1:
-            for job in self.todo:
-                yield grade_mission(self.context, job)
+        if not self.todo:
             return
+        limit = self.course.mission_time_limit or None
         with open_executor(self.context, _warm_up, min(workers, len(self.todo))) as executor:
-            for _, row in executor.map_unordered(grade_mission, self.todo):
+            for _, row in executor.map_unordered(grade_mission, self.todo,
+                                                 partial(lost_row, self.context, limit),
+                                                 time_limit=limit):
                 yield row
 
     @property
