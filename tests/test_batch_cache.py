@@ -25,7 +25,7 @@ from quadnav.batch.fly_one import (
 from quadnav.batch.folder import PLANS, batch_record, begin
 from quadnav.batch.grid import read_spec, spec_from_table
 from quadnav.batch.stages import StageCache
-from quadnav.batch.table import NAMES, PREVIOUS_NAMES, read_rows, same_row
+from quadnav.batch.table import NAMES, PREVIOUS_NAMES, UNTIMED_NAMES, read_rows, same_row
 from quadnav.control.registry import controller_gains
 from quadnav.planning.legs import leg_world
 from quadnav.sim.collision import body_grid
@@ -40,6 +40,7 @@ from quadnav.world import load_world
 from quadnav.world.connectivity import disconnected, unblocked_components
 
 PREVIOUS_BATCH = Path(__file__).parent / "data" / "previous_batch"
+UNTIMED_BATCH = Path(__file__).parent / "data" / "untimed_batch"
 WINDOW = "window:size=4x6x3,walls=1"
 SPEC = f"""\
 seeds = {{plan = 2, sim = 3}}
@@ -266,6 +267,31 @@ def test_a_batch_folder_written_before_the_simulation_seeds_resumes(tmp_path):
     for old, new in zip(previous, rows, strict=False):
         assert same_row(new, old | {"sim_seed": old["seed"]}, ignore=())
     assert same_row(rows[2], _alone(folder / "spec.toml")[2])
+    last = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder)
+    assert "3 missions, all already in" in last.stdout
+
+
+def test_a_batch_folder_written_before_the_time_to_goal_resumes(tmp_path):
+    # written by the batch command of quadnav before rows had the flown time to goal,
+    # stopped after 2 of its 3 missions
+    folder = tmp_path / "untimed"
+    shutil.copytree(UNTIMED_BATCH, folder)
+    untimed = read_rows(folder / "results.csv")
+    assert json.loads((folder / "batch.json").read_text())["columns"] == list(UNTIMED_NAMES)
+    assert [(r["reached_goal"], r["time_to_goal_s"]) for r in untimed] == [(True, None)] * 2
+
+    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder)
+
+    assert result.returncode == 0, result.stderr
+    assert f"3 missions, 2 already in {folder}; flying 1 on" in result.stdout
+    assert json.loads((folder / "batch.json").read_text())["columns"] == list(NAMES)
+    rows = read_rows(folder / "results.csv")
+    assert (folder / "results.csv").read_text().startswith(",".join(NAMES))
+    for old, new in zip(untimed, rows, strict=False):  # kept as flown: no time to goal
+        assert same_row(new, old, ignore=())
+    spec = read_spec(folder / "spec.toml")
+    assert same_row(rows[2], flown_row(load_context(spec), spec.missions()[2]))
+    assert rows[2]["reached_goal"] and 0 < rows[2]["time_to_goal_s"] < rows[2]["flight_time_s"]
     last = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder)
     assert "3 missions, all already in" in last.stdout
 

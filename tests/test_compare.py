@@ -22,7 +22,7 @@ from PIL import Image
 
 from quadnav.batch.compare import compare, holm, mcnemar, signed_rank
 from quadnav.batch.compare_page import leaderboard_figure
-from quadnav.batch.table import read_rows
+from quadnav.batch.table import UNTIMED_NAMES, read_rows
 from quadnav.pages import breakable
 
 #: One worker for the module, so that its module-scoped fixtures are built once under
@@ -43,6 +43,19 @@ controllers = ["cascade", "se3"]
 planners = ["rrtstar", "{PLANNER}"]
 winds = [[0.1, 0.05, 0]]
 """
+#: Two controllers flying the same trajectories, calm: the same PD law with stiff gains
+#: and with soft ones, which lag and come within the goal tolerance about half a second
+#: later in every mission (both reach the goal).
+STIFF, SOFT = (f"plain_controller.py:PDAttitude(kp={kp}, kd={kd})"
+               for kp, kd in ((6.5, 4.0), (1.0, 1.0)))
+DUO_SPEC = f"""\
+seeds = 3
+speeds = [2.0]
+improve = 300
+control_rate = 250.0
+maps = ["window:size=4x6x3,walls=1"]
+controllers = ["{STIFF}", "{SOFT}"]
+"""
 #: z of a two-sided 95 % normal interval.
 Z95 = 1.959963984540054
 
@@ -57,6 +70,17 @@ def batch(tmp_path_factory) -> tuple[Path, str]:
                       "-o", folder / "out")
     assert result.returncode == 0, result.stderr
     return folder / "out", result.stdout
+
+
+@pytest.fixture(scope="module")
+def duo(tmp_path_factory) -> Path:
+    """The batch of :data:`DUO_SPEC` flown by ``quadnav batch``: its folder."""
+    folder = tmp_path_factory.mktemp("duo")
+    shutil.copy(EXAMPLES / "plain_controller.py", folder)
+    (folder / "spec.toml").write_text(DUO_SPEC)
+    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder / "out")
+    assert result.returncode == 0, result.stderr
+    return folder / "out"
 
 
 def _rows(folder: Path) -> list[dict]:
@@ -192,6 +216,56 @@ def test_batch_compare_draws_the_same_leaderboard_once_the_batch_is_done(batch):
     assert lines[0] == f"16 missions, all already in {out}"
     assert lines[-len(stdout.splitlines()):] == stdout.splitlines()
     assert json.loads((out / "compare.json").read_text())["contenders"] == result["contenders"]
+
+
+def test_the_time_to_goal_is_each_flight_s_own_where_the_controllers_fly_one_trajectory(duo):
+    result, table, stdout = _compare(duo, "controller")
+
+    rows = _rows(duo)
+    times = {name: [float(r["time_to_goal_s"]) for r in rows if r["controller"].endswith(name)]
+             for name in (STIFF, SOFT)}
+    durations = {name: [r["trajectory_duration_s"] for r in rows if r["controller"].endswith(name)]
+                 for name in (STIFF, SOFT)}
+    assert durations[STIFF] == durations[SOFT]  # one trajectory per seed for both
+    # the soft gains lag: each flight of theirs comes within the tolerance later
+    assert all(soft > stiff + 0.3 for stiff, soft in zip(times[STIFF], times[SOFT], strict=True))
+    for entry in table:
+        mine = times[entry["contender"]]
+        assert float(entry["time_to_goal_median"]) == pytest.approx(statistics.median(mine))
+        assert float(entry["time_to_goal_q1"]) == pytest.approx(np.percentile(mine, 25))
+        assert int(entry["time_to_goal_n"]) == 3
+    paired = next(c for c in result["comparisons"] if c["metric"] == "time_to_goal")
+    ahead = 1 if paired["a"] == SOFT else -1
+    assert paired["pairs"] == 3 and ahead * paired["median_difference"] > 0.3
+    assert "untimed" in result and result["untimed"] == 0
+    assert "before quadnav measured it" not in stdout
+    page = (duo / "compare.html").read_text()
+    assert "when the flight came within the goal tolerance to stay" in page
+    assert f"{statistics.median(times[SOFT]):.3g} [" in page
+
+
+def test_a_batch_written_before_the_time_to_goal_says_it_has_none(duo, tmp_path):
+    old = tmp_path / "old"
+    shutil.copytree(duo, old)
+    with open(old / "results.csv", newline="") as file:
+        rows = list(csv.DictReader(file))
+    with open(old / "results.csv", "w", newline="") as file:
+        writer = csv.DictWriter(file, UNTIMED_NAMES, extrasaction="ignore", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(rows)
+    record = json.loads((old / "batch.json").read_text())
+    (old / "batch.json").write_text(json.dumps(record | {"columns": list(UNTIMED_NAMES)}))
+
+    result, table, stdout = _compare(old, "controller")
+
+    note = ("time to goal: 6 missions reached the goal in rows written before quadnav "
+            "measured it and have none; the time to goal is over the others")
+    assert stdout.splitlines()[1] == note and result["untimed"] == 6
+    assert all(entry["time_to_goal_n"] == "0" for entry in table)
+    assert [line.count("—") for line in stdout.splitlines()[3:5]] == [1, 1]
+    assert f"<p>{note}.</p>" in (old / "compare.html").read_text()
+    paired = next(c for c in result["comparisons"] if c["metric"] == "time_to_goal")
+    assert paired["pairs"] == 0 and not paired["significant"]
 
 
 def test_two_plugins_of_files_with_the_same_name_are_two_contenders_named_in_full(batch):

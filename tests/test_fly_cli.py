@@ -87,7 +87,8 @@ def test_a_missed_goal_exits_1_and_still_reports(tmp_path):
     assert result.returncode == 1, result.stdout + result.stderr
     assert "quadnav: flight failed:" in result.stderr
     metrics = json.loads((tmp_path / "out/metrics.json").read_text())
-    assert not metrics["success"]
+    assert not metrics["success"] and not metrics["reached_goal"]
+    assert metrics["time_to_goal_s"] is None  # it ended outside the goal tolerance
     assert (tmp_path / "out/flight.csv").exists()
 
 
@@ -165,6 +166,23 @@ def test_a_run_folder_reads_back(small_run):
     assert np.allclose(record.path[[0, -1]], [metrics["start"], metrics["goal"]])
     assert record.flight.t[-1] == pytest.approx(metrics["flight_time_s"], abs=1e-6)
     assert record.trajectory.t[-1] == pytest.approx(metrics["trajectory_duration_s"], abs=1e-6)
+
+
+@SMALL_RUN
+def test_the_time_to_goal_is_when_the_flown_records_came_within_the_tolerance_to_stay(
+        small_run):
+    out, result = small_run
+    assert result.returncode == 0, result.stderr
+    metrics = json.loads((out / "metrics.json").read_text())
+    flight = np.loadtxt(out / "flight.csv", delimiter=",", skiprows=1)
+    close = np.linalg.norm(flight[:, 1:4] - metrics["goal"], axis=1) <= metrics["goal_tolerance_m"]
+    arrived = len(close) - np.argmin(close[::-1])  # the first record of the last close run
+    assert close[arrived:].all() and not close[arrived - 1]
+
+    assert metrics["time_to_goal_s"] == pytest.approx(flight[arrived, 0], abs=1e-9)
+    # flown, not the reference's duration: it reached the goal before its 2 s of settling
+    assert metrics["time_to_goal_s"] != metrics["trajectory_duration_s"]
+    assert 0 < metrics["time_to_goal_s"] < metrics["flight_time_s"] - 1.0
 
 
 def test_reading_a_folder_that_is_not_a_run_is_a_user_error(tmp_path):

@@ -375,6 +375,7 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "body_outside_since_s": flight.body_outside.since,
         "final_error_m": flight.final_error,
         "goal_tolerance_m": settings.goal_tolerance,
+        "time_to_goal_s": time_to_goal(flight, settings.goal_tolerance),
         "flight_time_s": flight.duration,
         "rms_tracking_error_m": flight.rms_tracking_error,
         "max_tracking_error_m": flight.max_tracking_error,
@@ -386,6 +387,17 @@ def flight_metrics(flight: Flight, world: World, settings: SimSettings) -> dict:
         "sim_wall_time_s": flight.wall_time,
         "real_time_factor": flight.duration / flight.wall_time if flight.wall_time else None,
     }
+
+
+def time_to_goal(flight: Flight, tolerance: float) -> float | None:
+    """When ``flight`` came within ``tolerance`` m of its goal to stay, s (the time of the
+    first record from which every record is that close), or None when it ended farther
+    (then :func:`flight_metrics`' ``reached_goal`` is false, and only then)."""
+    far = np.linalg.norm(flight.position - flight.goal, axis=1) > tolerance
+    if far[-1]:
+        return None
+    last = np.flatnonzero(far)
+    return float(flight.t[last[-1] + 1 if last.size else 0])
 
 
 def fly_mission(world: World, start: ArrayLike | None = None, goal: ArrayLike | None = None,

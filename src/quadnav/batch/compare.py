@@ -5,7 +5,8 @@ A contender is a value of one axis of the grid (:data:`AXES`), or a combination 
 of several. Its missions are paired with another's: two missions pair when every other grid
 value (map and query, seed, speed, the other axes) is the same, so each pair differs only in
 the contender. Per contender: the success rate with its Wilson 95 % interval, and the median
-and quartiles of each :data:`METRICS` over the missions that have a value. Per pair of
+and quartiles of each :data:`METRICS` over the missions that have a value (the time to goal:
+those that reached the goal). Per pair of
 contenders: McNemar's exact test on the paired successes (a two-sided binomial test of the
 pairs where one succeeded and the other failed) and Wilcoxon's signed-rank test on each
 metric's paired values (the pairs where both have one), every p-value then corrected by
@@ -77,16 +78,24 @@ class Metric:
 
 #: The metrics compared besides success.
 METRICS = (
-    Metric("time_to_goal", "time to goal", "s", 1.0, ("trajectory_duration_s",)),
+    Metric("time_to_goal", "time to goal", "s", 1.0, ("time_to_goal_s",)),
     Metric("tracking_error", "RMS tracking error", "cm", 100.0, ("rms_tracking_error_m",)),
     Metric("margin_kept", "margin kept", "m", 1.0, ("flight_margin_m",), lower_is_better=False),
     Metric("energy", "rotor energy", "J", 1.0, ("rotor_energy_j",)),
     Metric("compute_time", "compute time", "s", 1.0,
            ("planning_time_s", "trajectory_time_s", "sim_wall_time_s")),
 )
-METRIC_NOTES = ("time to goal: the reference's duration; margin kept: the least margin the "
+METRIC_NOTES = ("time to goal: when the flight came within the goal tolerance to stay, so "
+                "over the missions that reached the goal; margin kept: the least margin the "
                 "flight kept off the legs; compute time: planning, trajectory and simulation "
                 "wall time (machine-dependent)")
+
+
+def untimed(rows: Sequence[dict[str, Any]]) -> int:
+    """How many of ``rows`` reached the goal but have no time to goal: rows of a table
+    written before flights measured it (:data:`~quadnav.batch.table.ARRIVAL_COLUMNS`), as
+    a flight that ends within the goal tolerance always has one."""
+    return sum(bool(row["reached_goal"]) and row["time_to_goal_s"] is None for row in rows)
 
 
 def short_spec(text: str) -> str:
@@ -256,8 +265,8 @@ def compare(rows: Sequence[dict[str, Any]], by: Sequence[str]) -> dict[str, Any]
         comparison["p_holm"] = adjusted
         comparison["significant"] = adjusted < ALPHA
         comparison["better"] = _better(comparison) if comparison["significant"] else None
-    return {"by": list(by), "alpha": ALPHA, "correction": "holm",
-            "missions": len(rows), "contenders": contenders, "comparisons": comparisons}
+    return {"by": list(by), "alpha": ALPHA, "correction": "holm", "missions": len(rows),
+            "untimed": untimed(rows), "contenders": contenders, "comparisons": comparisons}
 
 
 def _better(comparison: dict[str, Any]) -> str | None:

@@ -119,6 +119,15 @@ def comparison_text(comparison: dict[str, Any]) -> str:
     return found
 
 
+def untimed_text(result: dict[str, Any]) -> str:
+    """A line saying how many missions reached the goal without a time to goal (rows of a
+    table written before flights measured it), or "" when none did."""
+    if not result["untimed"]:
+        return ""
+    return (f"time to goal: {result['untimed']} missions reached the goal in rows written "
+            "before quadnav measured it and have none; the time to goal is over the others")
+
+
 def compare_html(result: dict[str, Any], folder: Path, png: bytes) -> str:
     """The page of the leaderboard ``result`` of the batch in ``folder``, with its figure
     ``png``."""
@@ -126,7 +135,7 @@ def compare_html(result: dict[str, Any], folder: Path, png: bytes) -> str:
     comparisons = sorted(result["comparisons"], key=lambda c: (not c["significant"], c["p_holm"]))
     return render(
         "compare.html", title="quadnav compare", folder=str(folder), version=__version__,
-        result=result, metric_notes=METRIC_NOTES, alpha=ALPHA,
+        result=result, metric_notes=METRIC_NOTES, alpha=ALPHA, untimed=untimed_text(result),
         leaderboard=figure(png, "Per contender, best at the top: the success rate with its "
                                 "95 % interval, and the median of each measure with its "
                                 "quartiles."),

@@ -8,8 +8,10 @@ missions already in the journal; any other batch is refused (or, with ``restart`
 folder's batch files are replaced).
 
 A folder written before the stall rule is a batch of ``stall = 0`` (each search ran its
-whole ``improve`` budget). A folder written before the simulation had seeds of its own and
-rows said which plan they flew (:data:`~quadnav.batch.table.PREVIOUS_NAMES`), or before
+whole ``improve`` budget). A folder written before rows had the flown time to goal
+(:data:`~quadnav.batch.table.UNTIMED_NAMES`; its rows keep it empty), before the simulation
+had seeds of its own and rows said which plan they flew
+(:data:`~quadnav.batch.table.PREVIOUS_NAMES`), or before
 that, before controllers, methods, references and wind classes were values of the grid
 (:data:`~quadnav.batch.table.EARLIER_NAMES`), is the same batch as the one its spec now
 reads as (:func:`current_record`): it resumes, and its ``batch.json`` and ``results.csv``
@@ -37,6 +39,7 @@ from quadnav.batch.table import (
     PREVIOUS_NAMES,
     RESULTS_CSV,
     RESULTS_PARQUET,
+    UNTIMED_NAMES,
     read_rows,
     write_csv,
     write_tables,
@@ -92,16 +95,17 @@ def read_record(folder: Path) -> dict[str, Any]:
 
 def current_record(record: dict[str, Any]) -> dict[str, Any]:
     """``record`` as written today: one written before the stall rule (no ``stall`` in its
-    spec) searched for its whole ``improve`` budget, ``stall = 0``; one written before the
-    simulation had seeds of its own (its columns :data:`PREVIOUS_NAMES`) is today's with
-    today's columns, its seeds seeding both; one written before controllers, methods,
+    spec) searched for its whole ``improve`` budget, ``stall = 0``; one written before rows
+    had the time to goal (its columns :data:`UNTIMED_NAMES`) or before the simulation had
+    seeds of its own (:data:`PREVIOUS_NAMES`, its seeds seeding both) is today's with
+    today's columns; one written before controllers, methods,
     references and wind classes were values of the grid (its columns :data:`EARLIER_NAMES`)
     had one ``method``, flew the default controller with no reference, and kept the gains of
     that controller alone; any other record as it is."""
     if "stall" not in record["spec"]:
         record = record | {"spec": record["spec"] | {"stall": 0, "stall_fraction":
                                                      DEFAULT_STALL_FRACTION}}
-    if record.get("columns") == list(PREVIOUS_NAMES):
+    if record.get("columns") in (list(UNTIMED_NAMES), list(PREVIOUS_NAMES)):
         return record | {"columns": list(NAMES)}
     if record.get("columns") != list(EARLIER_NAMES):
         return record

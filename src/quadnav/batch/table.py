@@ -61,6 +61,9 @@ ADDED_COLUMNS = ("wind_model", "controller", "method", "reference")
 #: The columns added when the simulation got seeds of its own and missions shared plans:
 #: a table written before has none of them.
 PLAN_COLUMNS = ("sim_seed", "plan_key")
+#: The columns added when flights measured when they reached the goal: a table written
+#: before has none of them, and its rows keep none (empty) when read.
+ARRIVAL_COLUMNS = ("time_to_goal_s",)
 #: The keys of ``metrics.json`` besides those of the grid (map, seed, planner).
 METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("success", BOOL), *((f"{point}_{a}", FLOAT) for point in POINTS for a in AXES),
@@ -74,7 +77,8 @@ METRIC_COLUMNS: tuple[tuple[str, str], ...] = (
     ("reached_goal", BOOL), ("ending", STR), ("contact_time_s", FLOAT), ("contact_block", INT),
     ("floor_touch_speed_m_s", FLOAT),
     ("body_outside_m", FLOAT), ("body_outside_time_s", FLOAT), ("body_outside_since_s", FLOAT),
-    ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("flight_time_s", FLOAT),
+    ("final_error_m", FLOAT), ("goal_tolerance_m", FLOAT), ("time_to_goal_s", FLOAT),
+    ("flight_time_s", FLOAT),
     ("rms_tracking_error_m", FLOAT), ("max_tracking_error_m", FLOAT),
     ("max_velocity_error_m_s", FLOAT), ("min_clearance_m", FLOAT), ("mixer_saturation", FLOAT),
     ("rotor_energy_j", FLOAT),
@@ -85,8 +89,10 @@ COLUMNS = (*GRID_COLUMNS, *METRIC_COLUMNS, ("search_stopped_by", STR), ("plan_ke
            ("error", STR))
 NAMES = tuple(name for name, _ in COLUMNS)
 TYPES = dict(COLUMNS)
+#: The columns of a table written before :data:`ARRIVAL_COLUMNS` were added.
+UNTIMED_NAMES = tuple(name for name in NAMES if name not in ARRIVAL_COLUMNS)
 #: The columns of a table written before :data:`PLAN_COLUMNS` were added.
-PREVIOUS_NAMES = tuple(name for name in NAMES if name not in PLAN_COLUMNS)
+PREVIOUS_NAMES = tuple(name for name in UNTIMED_NAMES if name not in PLAN_COLUMNS)
 #: The columns of a table written before :data:`ADDED_COLUMNS` were added.
 EARLIER_NAMES = tuple(name for name in PREVIOUS_NAMES if name not in ADDED_COLUMNS)
 #: Columns of wall time, which differ between runs of the same mission.
@@ -197,16 +203,17 @@ def csv_line(row: dict[str, Any]) -> str:
 
 HEADER = ",".join(NAMES) + "\n"
 #: The columns of a table written before today's, most recent first.
-OLDER_NAMES = (PREVIOUS_NAMES, EARLIER_NAMES)
+OLDER_NAMES = (UNTIMED_NAMES, PREVIOUS_NAMES, EARLIER_NAMES)
 
 
 def read_rows(path: Path, missions: Sequence[MissionSpec] = ()) -> list[dict[str, Any]]:
     """The rows of a results.csv (or journal); a last line without its newline (cut short
-    by a kill) is dropped. A table written before :data:`PLAN_COLUMNS` (or also
-    :data:`ADDED_COLUMNS`) were added is read too, each row completed from its mission
-    among ``missions`` (found by its key, or its
+    by a kill) is dropped. A table written before :data:`ARRIVAL_COLUMNS` (or also
+    :data:`PLAN_COLUMNS`, or also :data:`ADDED_COLUMNS`) were added is read too, each row
+    completed from its mission among ``missions`` (found by its key, or its
     :attr:`~quadnav.batch.grid.MissionSpec.earlier_key` in a table without
-    :data:`ADDED_COLUMNS`; the row takes the mission's key; ``plan_key`` stays empty).
+    :data:`ADDED_COLUMNS`; the row takes the mission's key; ``plan_key`` and
+    ``time_to_goal_s`` stay empty).
     QuadnavError naming the file and line if it is not a table.
     """
     try:

@@ -8,7 +8,12 @@ from pathlib import Path
 
 from quadnav.batch.compare import ALPHA, AXES, compare, write_tables
 from quadnav.batch.compare import choose_axes as chosen_axes
-from quadnav.batch.compare_page import comparison_text, leaderboard_rows, write_compare_page
+from quadnav.batch.compare_page import (
+    comparison_text,
+    leaderboard_rows,
+    untimed_text,
+    write_compare_page,
+)
 from quadnav.batch.folder import BATCH_JSON, batch_rows
 from quadnav.batch.table import RESULTS_CSV
 from quadnav.cli.commands import command_help
@@ -50,6 +55,8 @@ def leaderboard(folder: Path, rows: list[dict], by: list[str] | None) -> None:
     contenders = result["contenders"]
     print(f"compared by {', '.join(by)}: {len(contenders)} contenders, {len(rows)} missions; "
           "a mission is paired with those that differ only in the contender")
+    if note := untimed_text(result):
+        print(note)
     print("\n".join(_table(*leaderboard_rows(result))))
     tests = result["comparisons"]
     significant = sorted((c for c in tests if c["significant"]), key=lambda c: c["p_holm"])

@@ -27,8 +27,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from quadnav.batch.executor import time_limit_reason
 from quadnav.errors import QuadnavError
 from quadnav.files import atomic_output
@@ -39,7 +37,7 @@ from quadnav.plugins import user_traceback
 from quadnav.report.run_writer import write_run
 from quadnav.runfolder import replaced_folder
 from quadnav.runs import FIGURES, REPORT, RUN_FILES
-from quadnav.sim.flight import Ending, Flight
+from quadnav.sim.flight import Ending
 
 #: The row of a mission, JSON, in its folder.
 RESULT_FILE = "grade-result.json"
@@ -67,8 +65,8 @@ OUTCOMES = {
 }
 #: The figures of a mission, the first embedded in the grade for a failed mission.
 FIGURE = FIGURES[0]
-#: The numbers of metrics.json a row keeps, with the time to goal (:func:`time_to_goal`).
-ROW_METRICS = ("path_length_m", "trajectory_duration_s", "flight_time_s",
+#: The numbers of metrics.json a row keeps.
+ROW_METRICS = ("path_length_m", "trajectory_duration_s", "time_to_goal_s", "flight_time_s",
                "rms_tracking_error_m", "max_tracking_error_m", "final_error_m",
                "flight_margin_m", "margin_m", "margin_shortfall_m", "goal_tolerance_m",
                "contact_block", "contact_time_s", "planning_time_s", "sim_wall_time_s")
@@ -215,23 +213,11 @@ def lost_row(context: GradeContext, time_limit: float | None, job: GradeJob, rea
 def _flown_row(job: GradeJob, mission: Mission, strict: bool) -> dict[str, Any]:
     metrics = mission.metrics()
     outcome, reason = verdict(mission, metrics, strict)
-    flight = mission.flight
-    reached = None if flight is None else time_to_goal(flight, mission.settings.sim.goal_tolerance)
     return _base_row(job) | {
         "passed": outcome == "passed", "outcome": outcome, "reason": reason,
         "traceback": None, "report": f"{job.folder}/{REPORT}",
         "figure": f"{job.folder}/{FIGURE}",
-        "metrics": {key: metrics.get(key) for key in ROW_METRICS} | {"time_to_goal_s": reached}}
-
-
-def time_to_goal(flight: Flight, tolerance: float) -> float | None:
-    """When ``flight`` came within ``tolerance`` m of its goal to stay, s (the first
-    record from which every record is that close), or None when it ended farther."""
-    far = np.linalg.norm(flight.position - flight.goal, axis=1) > tolerance
-    if far[-1]:
-        return None
-    last = np.flatnonzero(far)
-    return float(flight.t[last[-1] + 1 if last.size else 0])
+        "metrics": {key: metrics.get(key) for key in ROW_METRICS}}
 
 
 def verdict(mission: Mission, metrics: Mapping[str, Any], strict: bool) -> tuple[str, str]:
