@@ -92,11 +92,17 @@ class TelloLink(Tello):
         except LinkLostError as error:
             raise LinkLostError(f"no connection to the Tello at {self.address[0]}: {error}"
                                 ) from None
+        if wait_for_state:
+            self._await_state(0, CONNECT_TIMEOUT, f"no state packet from the Tello at "
+                              f"{self.address[0]} within {CONNECT_TIMEOUT:g} s of 'command'")
+
+    def _await_state(self, seen: int, timeout: float, problem: str) -> None:
+        """Wait until more than ``seen`` state packets have come; LinkLostError saying
+        ``problem`` when none more comes within ``timeout`` s."""
         began = time.monotonic()
-        while wait_for_state and self._record.last_state is None:
-            if time.monotonic() - began > CONNECT_TIMEOUT:
-                raise LinkLostError(f"no state packet from the Tello at {self.address[0]} "
-                                    f"within {CONNECT_TIMEOUT:g} s of 'command'")
+        while self._record.states <= seen:
+            if time.monotonic() - began > timeout:
+                raise LinkLostError(problem)
             time.sleep(_POLL)
 
     def send_command_with_return(self, command: str,
@@ -158,13 +164,9 @@ class TelloLink(Tello):
         """Height above the takeoff floor, cm, from the first state packet to arrive from
         now (the latest may have left the drone before the last reply did: at ten a second,
         during a takeoff's climb); LinkLostError if none comes for ``link_timeout`` s."""
-        record, since = self._record, time.monotonic()
-        seen = record.states
-        while record.states == seen:
-            if time.monotonic() - since > self.link_timeout:
-                raise LinkLostError(f"no state packet for {self.link_timeout:g} s while "
-                                    "waiting for the height after the takeoff")
-            time.sleep(_POLL)
+        self._await_state(self._record.states, self.link_timeout,
+                          f"no state packet for {self.link_timeout:g} s while waiting for "
+                          "the height after the takeoff")
         return self.get_height()
 
     def state_age(self) -> float:
