@@ -13,20 +13,19 @@ body, and every such block is registered in the cell holding the centre.
 from __future__ import annotations
 
 import math
-from weakref import WeakKeyDictionary
 
 import numpy as np
 from numba import njit
 
 from quadnav.world.blockgrid import GridArrays, build_block_grid
-from quadnav.world.model import World
+from quadnav.world.model import World, WorldMemo
 
 #: Added to the rotation's absolute values so nearly parallel edges give no false gap.
 _PARALLEL_EPSILON = 1e-12
 
 
 #: The grids :func:`body_grid` made, by world and circumradius (m).
-_BODY_GRIDS: WeakKeyDictionary[World, dict[float, GridArrays]] = WeakKeyDictionary()
+_BODY_GRIDS: WorldMemo[float, GridArrays] = WorldMemo()
 
 
 def body_grid(world: World, half_size: np.ndarray) -> GridArrays:
@@ -36,11 +35,9 @@ def body_grid(world: World, half_size: np.ndarray) -> GridArrays:
     circumradius while the world lives (a world is immutable): the flights of a batch on
     one map share it."""
     radius = float(np.linalg.norm(half_size))
-    kept = _BODY_GRIDS.setdefault(world, {})
-    if radius not in kept:
-        grow = np.array([-radius] * 3 + [radius] * 3)
-        kept[radius] = build_block_grid(world.replace(blocks=world.blocks + grow))
-    return kept[radius]
+    grow = np.array([-radius] * 3 + [radius] * 3)
+    return _BODY_GRIDS.get(
+        world, lambda: build_block_grid(world.replace(blocks=world.blocks + grow)), radius)
 
 
 @njit(cache=True)

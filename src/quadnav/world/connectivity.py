@@ -16,15 +16,13 @@ resolution (a passage narrower than about two voxels may be missed).
 
 from __future__ import annotations
 
-from weakref import WeakKeyDictionary
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from quadnav.arrays import FloatArray
-from quadnav.profiling import stage, staged
-from quadnav.world.model import World
+from quadnav.profiling import staged
+from quadnav.world.model import World, WorldMemo
 
 #: Voxel budget for the default resolution.
 MAX_VOXELS = 4_000_000
@@ -104,8 +102,7 @@ def disconnected(world: World, start: ArrayLike, goal: ArrayLike,
 
 
 #: The components :func:`unblocked_components` labelled, by world and voxel budget.
-_COMPONENTS: WeakKeyDictionary[World, dict[int, tuple[NDArray[np.int32], FloatArray]]] = (
-    WeakKeyDictionary())
+_COMPONENTS: WorldMemo[int, tuple[NDArray[np.int32], FloatArray]] = WorldMemo()
 
 
 def unblocked_components(world: World, max_voxels: int) -> tuple[NDArray[np.int32],
@@ -114,13 +111,10 @@ def unblocked_components(world: World, max_voxels: int) -> tuple[NDArray[np.int3
     ``max_voxels`` voxels (see :func:`disconnected`): a label per voxel (0: blocked), and
     the voxel's size (3,), m. Labelled once per world while it lives (a world is
     immutable): the missions of a batch on one map and margin share them."""
-    kept = _COMPONENTS.setdefault(world, {})
-    if max_voxels not in kept:
-        with stage("proof labels"):
-            kept[max_voxels] = _labelled(world, max_voxels)
-    return kept[max_voxels]
+    return _COMPONENTS.get(world, lambda: _labelled(world, max_voxels), max_voxels)
 
 
+@staged("proof labels")
 def _labelled(world: World, max_voxels: int) -> tuple[NDArray[np.int32], FloatArray]:
     """The components of :func:`unblocked_components`, labelled."""
     shape = np.maximum(np.ceil(world.extent / default_resolution(world.extent, max_voxels)

@@ -8,8 +8,11 @@ point on a block face or on the boundary is *not* free; boxes are rows
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Generic, TypeVar
+from weakref import WeakKeyDictionary
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -358,3 +361,23 @@ def _segments(segments: ArrayLike) -> FloatArray:
     if segs.ndim != 3 or segs.shape[1:] != (2, 3):
         raise ValueError(f"segments must have shape (N, 2, 3), got {segs.shape}")
     return segs
+
+
+Key = TypeVar("Key", bound=Hashable)
+Value = TypeVar("Value")
+
+
+class WorldMemo(Generic[Key, Value]):
+    """Values made from a world once per key (say a radius or a voxel budget) and kept
+    while the world lives: a world is immutable, so the missions of a batch on one map
+    share them."""
+
+    def __init__(self) -> None:
+        self._kept: WeakKeyDictionary[World, dict[Key, Value]] = WeakKeyDictionary()
+
+    def get(self, world: World, make: Callable[[], Value], key: Key | None = None) -> Value:
+        """The value kept for ``world`` and ``key``, made by ``make()`` the first time."""
+        kept = self._kept.setdefault(world, {})
+        if key not in kept:
+            kept[key] = make()
+        return kept[key]

@@ -33,11 +33,11 @@ from quadnav.trajectory.clearance.collision import check_samples
 from quadnav.trajectory.model import Trajectory
 from quadnav.trajectory.references.plain import FlatOutputReference
 from quadnav.world.margins import box_margins, rounded, segment_box_margins
-from quadnav.world.model import World
+from quadnav.world.model import World, WorldMemo
 from quadnav.world.placement import format_point
 
 #: :attr:`SafeSpace.legs_world` of each map.
-_LEGS_WORLDS: WeakKeyDictionary[World, World] = WeakKeyDictionary()
+_LEGS_WORLDS: WorldMemo[None, World] = WorldMemo()
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,9 +62,7 @@ class SafeSpace:
         """Where legs may go: off every real block, inside the closed boundary (made once
         per map while it lives, with its block grid: the trajectories of a batch on one
         map share it)."""
-        if self.world not in _LEGS_WORLDS:
-            _LEGS_WORLDS[self.world] = leg_world(self.world)
-        return _LEGS_WORLDS[self.world]
+        return _LEGS_WORLDS.get(self.world, lambda: leg_world(self.world))
 
     def split(self, waypoints: ArrayLike) -> tuple[int, int]:
         """``(head, tail)``: ``waypoints[:head + 1]`` is the start leg and
