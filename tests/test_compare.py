@@ -191,17 +191,24 @@ def test_paired_differences_are_tested_by_mcnemar_and_signed_ranks_with_holm(bat
     assert all(a < b for a, b in zip(error["cascade"], error["se3"], strict=True))
     tracking = next(t for t in tests if t["metric"] == "tracking_error")
     assert tracking["p"] == pytest.approx(2 / 2 ** 8)
+    # the SE(3) controller never reached the goal: no pair has two times to goal, so that
+    # comparison tests nothing and stays out of the correction
+    untested = next(t for t in tests if t["metric"] == "time_to_goal")
+    assert untested["pairs"] == 0 and untested["p_holm"] == 1.0 and not untested["significant"]
+    tested = [t for t in tests if t is not untested]
+    assert all(t["pairs"] == 8 for t in tested)
     # Holm, step by step: the k-th smallest of m times m - k + 1, kept non-decreasing
-    order = sorted(range(len(tests)), key=lambda i: tests[i]["p"])
+    order = sorted(range(len(tested)), key=lambda i: tested[i]["p"])
     running = 0.0
     for k, i in enumerate(order):
-        running = max(running, min(1.0, (len(tests) - k) * tests[i]["p"]))
-        assert tests[i]["p_holm"] == pytest.approx(running)
-        assert tests[i]["significant"] == (running < 0.05)
+        running = max(running, min(1.0, (len(tested) - k) * tested[i]["p"]))
+        assert tested[i]["p_holm"] == pytest.approx(running)
+        assert tested[i]["significant"] == (running < 0.05)
     assert success["significant"] and success["better"] == "cascade"
     assert tracking["significant"] and tracking["better"] == "cascade"
+    assert "Holm-corrected over 5 tests" in stdout
     assert ("  cascade vs se3: success: 8 pairs only cascade reached the goal, 0 only se3; "
-            "cascade better (p 0.0078, Holm 0.047)") in stdout.splitlines()
+            "cascade better (p 0.0078, Holm 0.039)") in stdout.splitlines()
 
 
 def test_batch_compare_draws_the_same_leaderboard_once_the_batch_is_done(batch):
@@ -265,7 +272,12 @@ def test_a_batch_written_before_the_time_to_goal_says_it_has_none(duo, tmp_path)
     assert [line.count("—") for line in stdout.splitlines()[3:5]] == [1, 1]
     assert f"<p>{note}.</p>" in (old / "compare.html").read_text()
     paired = next(c for c in result["comparisons"] if c["metric"] == "time_to_goal")
-    assert paired["pairs"] == 0 and not paired["significant"]
+    assert paired["pairs"] == 0 and paired["p_holm"] == 1.0 and not paired["significant"]
+    # it tests nothing, so the correction is over the others alone
+    others = [c for c in result["comparisons"] if c is not paired]
+    assert all(c["pairs"] for c in others)
+    assert [c["p_holm"] for c in others] == pytest.approx(holm([c["p"] for c in others]))
+    assert f"Holm-corrected over {len(others)} tests" in stdout
 
 
 def test_two_plugins_of_files_with_the_same_name_are_two_contenders_named_in_full(batch):

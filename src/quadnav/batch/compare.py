@@ -10,8 +10,11 @@ those that reached the goal). Per pair of
 contenders: McNemar's exact test on the paired successes (a two-sided binomial test of the
 pairs where one succeeded and the other failed) and Wilcoxon's signed-rank test on each
 metric's paired values (the pairs where both have one), every p-value then corrected by
-Holm's method over all of them; a difference is significant when its corrected p-value is
-below :data:`ALPHA`.
+Holm's method over all the comparisons that have a pair to test; a difference is significant
+when its corrected p-value is below :data:`ALPHA`. A comparison without a pair (a metric that
+rows written before its column have none of) tests nothing: it stays out of the correction,
+which it would only make stricter, with p-values of 1 (no pair has two times to goal when
+one contender never reached the goal).
 """
 
 from __future__ import annotations
@@ -260,10 +263,13 @@ def compare(rows: Sequence[dict[str, Any]], by: Sequence[str]) -> dict[str, Any]
                     "a": first, "b": second, "metric": metric.name, "pairs": len(x),
                     "median_difference": float(np.median(np.subtract(x, y))) if x else None,
                     "p": signed_rank(x, y)})
-    for comparison, adjusted in zip(comparisons, holm([c["p"] for c in comparisons]),
-                                    strict=True):
+    tested = [c for c in comparisons if c["pairs"]]
+    for comparison in comparisons:
+        comparison["p_holm"] = 1.0
+    for comparison, adjusted in zip(tested, holm([c["p"] for c in tested]), strict=True):
         comparison["p_holm"] = adjusted
-        comparison["significant"] = adjusted < ALPHA
+    for comparison in comparisons:
+        comparison["significant"] = comparison["p_holm"] < ALPHA
         comparison["better"] = _better(comparison) if comparison["significant"] else None
     return {"by": list(by), "alpha": ALPHA, "correction": "holm", "missions": len(rows),
             "untimed": untimed(rows), "contenders": contenders, "comparisons": comparisons}

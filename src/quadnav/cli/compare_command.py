@@ -60,7 +60,8 @@ def leaderboard(folder: Path, rows: list[dict], by: list[str] | None) -> None:
     print("\n".join(_table(*leaderboard_rows(result))))
     tests = result["comparisons"]
     significant = sorted((c for c in tests if c["significant"]), key=lambda c: c["p_holm"])
-    print(f"significant differences at alpha {ALPHA:g}, Holm-corrected over {len(tests)} tests "
+    print(f"significant differences at alpha {ALPHA:g}, Holm-corrected over "
+          f"{sum(bool(c['pairs']) for c in tests)} tests "
           "(McNemar's exact test on success, Wilcoxon's signed-rank test on the rest): "
           f"{len(significant) or 'none'}")
     for c in significant:
