@@ -36,7 +36,11 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import tomllib
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from packaging.requirements import Requirement
 
 REPO = Path(__file__).resolve().parents[1]
 COMMANDS = {
@@ -66,6 +70,22 @@ def cpu_seconds(argv: list[str], folder: Path, cache: Path | None,
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+def missing_build_requirements() -> list[str]:
+    """The requirements of pyproject.toml's ``[build-system]`` that this environment does
+    not meet (the wheel is built here without build isolation)."""
+    requires = tomllib.loads((REPO / "pyproject.toml").read_text())["build-system"]["requires"]
+    missing = []
+    for text in requires:
+        requirement = Requirement(text)
+        try:
+            if version(requirement.name) in requirement.specifier:
+                continue
+        except PackageNotFoundError:
+            pass
+        missing.append(text)
+    return missing
+
+
 def after_pip_install(scratch: Path) -> tuple[float, float]:
     """CPU seconds of building this checkout's wheel (kernels compiled in) and of the first
     ``quadnav fly`` of that wheel installed into ``scratch``."""
@@ -91,6 +111,9 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="2 repeats")
     args = parser.parse_args()
     repeats = 2 if args.quick else args.repeats
+    if missing := missing_build_requirements():
+        parser.error("the wheel is built in this environment, which lacks its build "
+                     f"requirements: pip install {' '.join(repr(m) for m in missing)}")
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
         baseline = statistics.median(cpu_seconds([sys.executable, "-c", "pass"], folder,
