@@ -66,7 +66,7 @@ def batch(tmp_path_factory) -> tuple[Path, str]:
     folder = tmp_path_factory.mktemp("compare")
     shutil.copy(EXAMPLES / "plain_planner.py", folder)
     (folder / "spec.toml").write_text(SPEC)
-    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "2",
+    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "1",
                       "-o", folder / "out")
     assert result.returncode == 0, result.stderr
     return folder / "out", result.stdout
@@ -78,7 +78,8 @@ def duo(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("duo")
     shutil.copy(EXAMPLES / "plain_controller.py", folder)
     (folder / "spec.toml").write_text(DUO_SPEC)
-    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder / "out")
+    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "1",
+                      "-o", folder / "out")
     assert result.returncode == 0, result.stderr
     return folder / "out"
 
@@ -374,6 +375,8 @@ def test_a_batch_with_a_single_contender_or_an_axis_that_does_not_vary_is_refuse
     result = run_here("batch", "window:size=4x6x3,walls=1", "--seeds", "1", "--quiet",
                       "-o", tmp_path / "one")
     assert result.returncode == 0, result.stderr
+    # one mission, one job: one worker started, not one per CPU
+    assert json.loads((tmp_path / "one" / "summary.json").read_text())["ran_on"]["workers"] == 1
 
     assert_user_error(run_here("compare", tmp_path / "one"),
                       f"{tmp_path / 'one'}: the batch has a single contender",
