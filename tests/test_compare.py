@@ -66,7 +66,7 @@ def batch(tmp_path_factory) -> tuple[Path, str]:
     folder = tmp_path_factory.mktemp("compare")
     shutil.copy(EXAMPLES / "plain_planner.py", folder)
     (folder / "spec.toml").write_text(SPEC)
-    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "2",
+    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "1",
                       "-o", folder / "out")
     assert result.returncode == 0, result.stderr
     return folder / "out", result.stdout
@@ -78,7 +78,8 @@ def duo(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("duo")
     shutil.copy(EXAMPLES / "plain_controller.py", folder)
     (folder / "spec.toml").write_text(DUO_SPEC)
-    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder / "out")
+    result = run_here("batch", folder / "spec.toml", "--quiet", "--workers", "1",
+                      "-o", folder / "out")
     assert result.returncode == 0, result.stderr
     return folder / "out"
 
@@ -116,6 +117,16 @@ def _compare(folder: Path, *by: str) -> tuple[dict, list[dict], str]:
     return json.loads((folder / "compare.json").read_text()), table, result.stdout
 
 
+@pytest.fixture(scope="module")
+def compared(batch, tmp_path_factory) -> tuple[Path, dict, list[dict], str]:
+    """``quadnav compare`` run once, by both axes (each pair of values contends), on a copy
+    of the batch's folder that no test writes into: the copy, compare.json, compare.csv's
+    rows and stdout."""
+    out = tmp_path_factory.mktemp("compared") / "out"
+    shutil.copytree(batch[0], out)
+    return out, *_compare(out)
+
+
 def test_the_batch_says_the_success_rate_of_each_contender(batch):
     out, stdout = batch
     planner = PLANNER
@@ -134,9 +145,8 @@ def test_the_batch_says_the_success_rate_of_each_contender(batch):
     assert f"{planner}, se3" in page
 
 
-def test_each_contender_has_its_wilson_interval_and_medians_of_its_rows(batch):
-    out, _ = batch
-    result, table, stdout = _compare(out)  # both axes vary: each pair of values contends
+def test_each_contender_has_its_wilson_interval_and_medians_of_its_rows(compared):
+    out, result, table, stdout = compared
 
     assert result["by"] == ["controller", "planner"]
     assert "compared by controller, planner: 4 contenders, 16 missions;" in stdout
@@ -312,9 +322,8 @@ def test_mcnemar_counts_the_discordant_pairs_and_equal_pairs_carry_no_signed_ran
         2 / 2 ** 5)
 
 
-def test_the_page_and_figure_show_every_contender(batch):
-    out, _ = batch
-    result, table, stdout = _compare(out)
+def test_the_page_and_figure_show_every_contender(compared):
+    out, result, table, stdout = compared
 
     assert stdout.splitlines()[-1] == (f"wrote {out}/compare.csv, {out}/compare.json, "
                                        f"{out}/compare.html, {out}/compare.png")
@@ -333,9 +342,9 @@ def test_the_page_and_figure_show_every_contender(batch):
 
 
 @pytest.mark.parametrize("window_width", [1280, 960])
-def test_in_chromium_the_page_fits_and_shows_the_bars(browser, batch, tmp_path, window_width):
-    out, _ = batch
-    _compare(out)
+def test_in_chromium_the_page_fits_and_shows_the_bars(browser, compared, tmp_path,
+                                                     window_width):
+    out = compared[0]
     browser.set_window_size(window_width, 900)
     try:
         browser.get((out / "compare.html").as_uri())
@@ -386,6 +395,8 @@ def test_a_batch_with_a_single_contender_or_an_axis_that_does_not_vary_is_refuse
     result = run_here("batch", "window:size=4x6x3,walls=1", "--seeds", "1", "--quiet",
                       "-o", tmp_path / "one")
     assert result.returncode == 0, result.stderr
+    # one mission, one job: one worker started, not one per CPU
+    assert json.loads((tmp_path / "one" / "summary.json").read_text())["ran_on"]["workers"] == 1
 
     assert_user_error(run_here("compare", tmp_path / "one"),
                       f"{tmp_path / 'one'}: the batch has a single contender",

@@ -97,7 +97,7 @@ class BatchRun:
 
         Args:
             workers: local worker processes (default: one per CPU), or the CPUs of a local
-                Ray.
+                Ray; no more than the jobs the missions make.
             ray: run on Ray, at ``address`` (None: a local Ray started for the run).
             address: a Ray cluster's address.
             on_start: called with the number of workers and the numba threads of each
@@ -111,13 +111,14 @@ class BatchRun:
         """
         executor = flying = None
         ran_on = None
-        jobs = plan_jobs(self.todo, workers or cpu_count())
+        workers = workers or cpu_count()
+        jobs = plan_jobs(self.todo, workers)
         if jobs:
             # the plans kept on disk where the workers share the driver's disk
             plans = None if ray and address is not None else self.folder / PLANS
+            # no more workers than jobs: a worker without one would only start and end
             executor = flying = open_executor(replace(self.context, plans=plans), warm_up,
-                                              min(workers, len(jobs)) if workers else None,
-                                              ray, address)
+                                              min(workers, len(jobs)), ray, address)
             ran_on = {"workers": executor.workers, "numba_threads": executor.numba_threads}
         try:
             begin(self.folder, self.record, self.restart, list(self.rows.values()))
