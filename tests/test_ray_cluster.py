@@ -3,8 +3,7 @@ head with token authentication on and a second node, each a ``ray start`` of its
 (tests/raycluster.py; one cluster for the module). A client without the cluster's token
 gets one line at once, saying so; with it, a batch runs across both nodes and gives the
 table of the missions flown one by one here, row for row, also when Ray workers are killed
-mid-batch, or the second node while it flies a mission (it is started again after); and a
-tune study is the study of the same seed on one local worker."""
+mid-batch, or the second node while it flies a mission (it is started again after)."""
 
 from __future__ import annotations
 
@@ -25,9 +24,8 @@ from batchtools import (
     write_spec,
     write_staller_spec,
 )
-from clitools import assert_user_error, run_here
+from clitools import assert_user_error
 from raycluster import RayCluster, RayNode, client_environment, ray_cluster
-from tunetools import QUICK, study_trials
 
 from quadnav.batch.grid import read_spec
 from quadnav.batch.table import read_rows, same_row
@@ -181,25 +179,3 @@ def test_a_node_killed_while_it_flies_a_mission_loses_none_and_the_summary_count
     rows = read_rows(tmp_path / "out" / "results.csv")
     assert [row["mission_key"] for row in rows] == [m.key for m in read_spec(spec).missions()]
     assert all(same_row(a, b) for a, b in zip(rows, rows_one_by_one(spec), strict=True))
-
-
-def test_a_tune_study_on_the_cluster_is_the_study_of_the_same_seed_on_a_local_worker(
-        cluster, tmp_path):
-    pytest.importorskip("optuna", reason="tune is an optional extra: pip install 'quadnav[tune]'")
-    (tmp_path / "quick.toml").write_text(QUICK)
-    tune = ["tune", "--train", tmp_path / "quick.toml", "--test", tmp_path / "quick.toml",
-            "--space", "outer", "--trials", "6", "--parallel", "3", "--seed", "3",
-            "--compare", "--quiet", "-o"]
-    ran_before = tasks_ran(cluster)
-
-    on_ray = quadnav(tmp_path, *tune, tmp_path / "ray", "--ray", cluster.address,
-                     RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=cluster.token)
-    local = run_here(*tune, tmp_path / "local", "--workers", "1")
-
-    assert on_ray.returncode == 0, on_ray.stderr
-    assert f"CPUs of the Ray cluster at {cluster.address}" in on_ray.stdout
-    # 6 trials x 2 references, then the own and the tuned gains on both sets (2 + 2)
-    assert (tasks_ran(cluster) - ran_before).total() == 6 * 2 + 2 * (2 + 2)
-    assert local.returncode == 0, local.stderr
-    trials = study_trials(tmp_path / "local")
-    assert len(trials) == 6 and study_trials(tmp_path / "ray") == trials

@@ -1,7 +1,6 @@
 """quadnav tune: the search space, the objective, a real SQLite Optuna study that resumes,
-tuned gains that beat the vehicle's own and every course table on flights they were not
-tuned on, and bad input. (The same study on one worker and on a Ray cluster:
-tests/test_ray_cluster.py.)"""
+the same study on one worker and on a real local Ray, tuned gains that beat the vehicle's
+own and every course table on flights they were not tuned on, and bad input."""
 
 from __future__ import annotations
 
@@ -13,13 +12,13 @@ import numpy as np
 import optuna
 import pytest
 from clitools import assert_user_error, run_here
-from tunetools import QUICK
 
 from quadnav.config import as_plain
 from quadnav.control.gains import Gains, course_gain_names
 from quadnav.control.registry import controller_gains
 from quadnav.errors import QuadnavError
 from quadnav.tune.evaluate import item_cost
+from quadnav.tune.run import TuneRun, TuneSettings
 from quadnav.tune.space import CASCADE, OUTER, starting_point, with_values
 from quadnav.tune.study import StudySettings, distributions, open_study
 from quadnav.vehicle.params import load_params
@@ -35,6 +34,10 @@ HELD_OUT = """references = ["circle:radius=1,speed=2", "step:axis=y,size=1,durat
 maps = ["forest:size=8x8x4,seed=3"]
 seeds = [5]
 speeds = [2.5]
+gusts = [0.01]
+"""
+#: Only references: a study over them flies in a fraction of a second per trial.
+QUICK = """references = ["hover:duration=2", "step:axis=z,size=0.5,duration=3"]
 gusts = [0.01]
 """
 
@@ -98,6 +101,27 @@ def test_a_study_resumes_with_interrupted_trials_failed_and_refuses_other_knobs(
     assert states == [optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.FAIL]
     with pytest.raises(QuadnavError, match="searches other gains"):
         open_study(settings, CASCADE, starting_point(Gains(), CASCADE))
+
+
+def _quick_run(folder, ray: bool) -> list[float]:
+    (folder / "quick.toml").write_text(QUICK)
+    settings = TuneSettings(
+        vehicle="tello", gains=None, space="outer",
+        study=StudySettings(trials=6, sampler="tpe", seed=3, name="quick", parallel=3,
+                            storage=f"sqlite:///{folder / 'study.db'}"),
+        training=str(folder / "quick.toml"), held_out=str(folder / "quick.toml"), compare=())
+    tuning = TuneRun(settings)
+    outcome = tuning.run(tuning.plan(), workers=1 if not ray else 2, ray=ray)
+    return [trial.value for trial in outcome.trials]
+
+
+def test_the_same_seed_gives_the_same_study_on_a_local_worker_and_on_ray(tmp_path):
+    pytest.importorskip("ray")
+    (tmp_path / "local").mkdir()
+    (tmp_path / "ray").mkdir()
+    local = _quick_run(tmp_path / "local", ray=False)
+    on_ray = _quick_run(tmp_path / "ray", ray=True)
+    assert len(local) == 6 and local == on_ray
 
 
 # --- the command ----------------------------------------------------------------------------
