@@ -200,7 +200,7 @@ def test_a_batch_keeps_its_plans_and_a_resumed_batch_plans_none_again(spec_path,
                                                                       tmp_path):
     out = tmp_path / "out"
 
-    result = run_here("batch", spec_path, "--workers", "2", "--quiet", "-o", out)
+    result = run_here("batch", spec_path, "--workers", "1", "--quiet", "-o", out)
 
     assert result.returncode == 0, result.stderr
     rows = read_rows(out / "results.csv")
@@ -255,7 +255,7 @@ def test_a_batch_folder_written_before_the_simulation_seeds_resumes(tmp_path):
     spec = folder / "spec.toml"
     spec.write_text(spec.read_text() + "stall = 0\n")
 
-    result = run_here("batch", spec, "--quiet", "-o", folder)
+    result = run_here("batch", spec, "--workers", "1", "--quiet", "-o", folder)
 
     assert result.returncode == 0, result.stderr
     assert f"3 missions, 2 already in {folder}; flying 1 on" in result.stdout
@@ -280,7 +280,8 @@ def test_a_batch_folder_written_before_the_time_to_goal_resumes(tmp_path):
     assert json.loads((folder / "batch.json").read_text())["columns"] == list(UNTIMED_NAMES)
     assert [(r["reached_goal"], r["time_to_goal_s"]) for r in untimed] == [(True, None)] * 2
 
-    result = run_here("batch", folder / "spec.toml", "--quiet", "-o", folder)
+    result = run_here("batch", folder / "spec.toml", "--workers", "1", "--quiet", "-o",
+                      folder)
 
     assert result.returncode == 0, result.stderr
     assert f"3 missions, 2 already in {folder}; flying 1 on" in result.stdout

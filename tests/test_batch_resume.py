@@ -11,15 +11,14 @@ from pathlib import Path
 
 import pyarrow.parquet as pq
 from batchtools import MISSIONS, rows_one_by_one, write_spec
-from clitools import QUADNAV
+from clitools import QUADNAV, run_here
 
 from quadnav.batch.table import read_rows, same_row
 
 
-def _start(spec: Path, out: Path, workers: int = 1) -> subprocess.Popen:
-    return subprocess.Popen([*QUADNAV, "batch", str(spec), "--workers", str(workers), "--quiet",
-                             "-o", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+def _start(spec: Path, out: Path) -> subprocess.Popen:
+    return subprocess.Popen([*QUADNAV, "batch", str(spec), "--workers", "1", "--quiet", "-o",
+                             str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
 def _rows_written(path: Path) -> int:
@@ -67,11 +66,10 @@ def test_a_stopped_batch_keeps_its_rows_and_a_rerun_completes_the_same_table(tmp
         kept, (r for r in more if r["mission_key"] in {k["mission_key"] for k in kept}),
         strict=True))
 
-    last = _start(spec, out, workers=2)
-    stdout, stderr = last.communicate(timeout=120)
+    last = run_here("batch", spec, "--workers", "2", "--quiet", "-o", out)  # not stopped
 
-    assert last.returncode == 0, stderr
-    assert f"{MISSIONS} missions, {len(more)} already in {out}" in stdout
+    assert last.returncode == 0, last.stderr
+    assert f"{MISSIONS} missions, {len(more)} already in {out}" in last.stdout
     rows = read_rows(journal)
     reference = rows_one_by_one(spec)  # flown here, one by one, without a stop
     assert [r["mission_key"] for r in rows] == [r["mission_key"] for r in reference]

@@ -7,12 +7,11 @@ why, and the batch goes on."""
 from __future__ import annotations
 
 import json
-import os
-import signal
 
 import pytest
 from batchtools import assert_killer_table, write_killer_spec
 from clitools import run_here
+from workerjobs import kill_worker, kill_worker_for
 
 from quadnav.batch.executor import RETRIES, LocalExecutor, WorkerDiedError
 from quadnav.batch.fly_one import fly_row, load_context
@@ -59,7 +58,7 @@ def test_a_mission_that_kills_its_worker_every_time_takes_none_sharing_its_plan_
     spec.write_text('seeds = 1\nspeeds = [2.0]\nmaps = ["room.txt"]\n'
                     'winds = [[0, 0, 0], [0.01, 0, 0], "killer.py:Killer()", [0.02, 0, 0]]\n')
 
-    result = run_here("batch", spec, "--workers", "2", "--quiet", "-o", tmp_path / "out")
+    result = run_here("batch", spec, "--workers", "1", "--quiet", "-o", tmp_path / "out")
 
     assert result.returncode == 0, result.stderr
     assert "; 4 flown again after the worker process flying them died" in result.stdout
@@ -79,13 +78,6 @@ def test_a_mission_that_kills_its_worker_every_time_takes_none_sharing_its_plan_
     assert (summary["retried"], summary["errors"]) == (4, 1)
 
 
-def kill_worker_for(shared: object, item: int) -> int:
-    """A job: ``item`` times ``shared``, or for item 0 its worker killed (SIGKILL)."""
-    if item == 0:
-        os.kill(os.getpid(), signal.SIGKILL)
-    return shared * item
-
-
 def test_a_job_that_kills_its_worker_every_time_is_an_error_without_a_lost_result():
     with LocalExecutor(shared=10, workers=1) as executor:
         jobs = executor.map_unordered(kill_worker_for, [2, 0])
@@ -93,11 +85,6 @@ def test_a_job_that_kills_its_worker_every_time_is_an_error_without_a_lost_resul
         with pytest.raises(WorkerDiedError, match=f"died {RETRIES + 1} times"):
             next(jobs)
         assert executor.retried == 1
-
-
-def kill_worker(shared: object) -> None:
-    """A warm-up that kills its worker (SIGKILL)."""
-    os.kill(os.getpid(), signal.SIGKILL)
 
 
 def test_a_worker_that_dies_as_it_starts_is_an_error_at_once():

@@ -15,13 +15,14 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
-from clitools import QUADNAV
+from clitools import QUADNAV, run_here
 
 from quadnav.cli.launch import stop_again
 from quadnav.cli.main import main
@@ -40,9 +41,12 @@ POLL = 0.002  # s between looks at a folder
 EXIT_KILLED = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
+def fly_args(folder: Path, *flags: str) -> list[str]:
+    return ["fly", SMALL, "--iterations", "300", *flags, "--quiet", "-o", str(folder)]
+
+
 def start_fly(folder: Path, *flags: str) -> subprocess.Popen:
-    return subprocess.Popen([*QUADNAV, "fly", SMALL, "--iterations", "300", *flags, "--quiet",
-                             "-o", str(folder)], stdout=subprocess.DEVNULL,
+    return subprocess.Popen([*QUADNAV, *fly_args(folder, *flags)], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
 
 
@@ -61,6 +65,34 @@ def writing_in(folder: Path):
     return lambda: sorted(os.listdir(folder)) != before
 
 
+def timed_fly(folder: Path, *flags: str) -> tuple[int, float]:
+    """``quadnav fly`` into the empty ``folder``, run in this process: its exit code, and
+    how long it took from beginning to write (the folder changes, as the staging folder
+    appears) to its files reaching the folder (its metrics.json is in place), s, timed
+    from the folder as the killed runs are, by a thread that looks every :data:`POLL` s."""
+    events = [writing_in(folder), lambda: (folder / "metrics.json").exists()]
+    seen: list[float] = []
+    done = threading.Event()
+
+    def watch() -> None:
+        for event in events:
+            while not event():
+                if done.is_set():
+                    return
+                time.sleep(POLL)
+            seen.append(time.monotonic())
+
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    try:
+        code = run_here(*fly_args(folder, *flags)).returncode
+    finally:
+        done.set()
+        watcher.join()
+    assert len(seen) == 2, "the run's writing was not seen"
+    return code, seen[1] - seen[0]
+
+
 def files_of(folder: Path) -> dict[str, bytes]:
     """The files in ``folder`` (not its subfolders) by name, with their contents."""
     return {path.name: path.read_bytes() for path in folder.iterdir() if path.is_file()}
@@ -73,11 +105,9 @@ def references(tmp_path_factory):
     root = tmp_path_factory.mktemp("references")
     old, new = root / "old", root / "new"
     new.mkdir()
-    old_run = start_fly(old, *OLD_FLAGS)
-    new_run = start_fly(new, *NEW_FLAGS)
-    staged = wait_for(writing_in(new), new_run)
-    moved = wait_for(lambda: (new / "metrics.json").exists(), new_run) or time.monotonic()
-    assert new_run.wait(timeout=120) == 0 and old_run.wait(timeout=120) == 0
+    assert run_here(*fly_args(old, *OLD_FLAGS)).returncode == 0
+    code, writing = timed_fly(new, *NEW_FLAGS)
+    assert code == 0
     (old / NOTES).write_text(NOTES_TEXT)
     old_files, new_files = files_of(old), files_of(new)
     assert {*FIGURES, REPORT} <= old_files.keys() and not {*FIGURES, REPORT} & new_files.keys()
@@ -89,7 +119,7 @@ def references(tmp_path_factory):
         flight = np.loadtxt(folder / "flight.csv", delimiter=",", skiprows=1)
         assert metrics["path_vertices"] == len(path)
         assert flight[-1, 0] == pytest.approx(metrics["flight_time_s"], abs=1e-9)
-    return old, old_files, new_files, moved - staged
+    return old, old_files, new_files, writing
 
 
 def which_run(folder: Path, old_files: dict[str, bytes], new_files: dict[str, bytes]) -> str:

@@ -130,7 +130,7 @@ def test_the_same_seed_gives_the_same_study_on_a_local_worker_and_on_ray(tmp_pat
 def test_tuned_gains_beat_the_vehicles_own_and_every_course_table_held_out(tmp_path):
     out = tmp_path / "out"
     result = run_here("tune", *_sets(tmp_path), "--trials", "24", "--parallel", "4",
-                      "--workers", "2", "--quiet", "-o", out)
+                      "--workers", "1", "--quiet", "-o", out)
     assert result.returncode == 0, result.stderr
     record = json.loads((out / "tune.json").read_text())
     print(result.stdout)
@@ -152,7 +152,7 @@ def test_tuned_gains_beat_the_vehicles_own_and_every_course_table_held_out(tmp_p
     assert "http://" not in page and "https://" not in page and page.count("<img") == 2
     # The study is kept: asking for more trials resumes it, the first 24 as they were.
     resumed = run_here("tune", *_sets(tmp_path), "--trials", "28", "--parallel", "4",
-                       "--workers", "2", "--quiet", "-o", out)
+                       "--workers", "1", "--quiet", "-o", out)
     assert resumed.returncode == 0, resumed.stderr
     again = _trials(out)
     assert len(again) == 29 and again[:25] == rows
