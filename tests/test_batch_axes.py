@@ -188,7 +188,10 @@ def test_a_batch_folder_written_before_the_contender_columns_resumes_and_refies(
     again = run_here("refly", folder, "2", "-o", tmp_path / "row2", "--no-figures")
     assert again.returncode == 0, again.stderr
     metrics = json.loads((tmp_path / "row2" / "metrics.json").read_text())
-    assert metrics["rms_tracking_error_m"] == earlier[1]["rms_tracking_error_m"]
+    # the same mission flown again: the row's error, to the last digits another CPU's
+    # arithmetic changes (the folder was written on another machine)
+    assert metrics["rms_tracking_error_m"] == pytest.approx(earlier[1]["rms_tracking_error_m"],
+                                                            rel=1e-6)
 
     # it searched before the stall rule: its spec now means another batch, refused ...
     refused = run_here("batch", spec, "--quiet", "-o", folder)

@@ -169,11 +169,13 @@ def test_rotorpys_minsnap_flies_through_a_planned_path_with_its_margin_measured(
     assert parameters["reference_info"]["duration_from"] == "t_keyframes"
     assert metrics["trajectory_duration_s"] == pytest.approx(rotorpys.t_keyframes[-1], abs=1e-12)
     assert metrics["success"] and metrics["collision"] is False
-    # The reference written is rotorpy's own, sample for sample.
+    # The reference written is rotorpy's own, sample for sample, to the accuracy of its QP
+    # solver: cvxopt meets its constraints to about 1e-7 of their scale, so the same QP
+    # solved in the command and here gave end accelerations 1.4e-7 m/s^2 apart on one CPU.
     table = np.loadtxt(tmp_path / "trajectory.csv", delimiter=",", skiprows=1)
     own = [rotorpys.update(t) for t in table[:, 0]]
     for columns, key in ((slice(1, 4), "x"), (slice(4, 7), "x_dot"), (slice(7, 10), "x_ddot")):
-        assert np.abs(table[:, columns] - [flat[key] for flat in own]).max() < 1e-7, key
+        assert np.abs(table[:, columns] - [flat[key] for flat in own]).max() < 1e-5, key
     # The margin it keeps, from its samples flown straight between: a lower bound of the
     # margin of rotorpy's curve itself, sampled 5 times finer, within a millimetre of it.
     # The curve is sampled finely within a step of the table (10 ms) of every sample that
