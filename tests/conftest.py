@@ -190,13 +190,25 @@ def browser():
     driver.quit()
 
 
+#: Modules of tests that take many seconds each (a batch on a local Ray, a tuning study,
+#: killed, stopped and resumed runs, the documentation's commands, the examples): they
+#: start first, so that the run does not end with one worker finishing one of them while
+#: the others wait.
+LONG_TESTS_FIRST = ("test_batch_ray.py", "test_tune.py", "test_run_folders.py",
+                    "test_batch_resume.py", "test_batch_retry.py", "test_examples.py",
+                    "test_doc_commands.py", "test_flight_figures.py", "test_free_volume.py")
+
+
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Make ``xdist_group`` marks group again: pytest-xdist 3.8 names a grouped test by
+    """Start the modules of :data:`LONG_TESTS_FIRST` first (xdist hands out the groups of
+    ``xdist_group`` first, the most tests first, then single tests in this order), and make
+    ``xdist_group`` marks group again: pytest-xdist 3.8 names a grouped test by
     setting ``item._nodeid`` (``...@group``), which pytest 9.2's ``nodeid`` no longer reads,
     so every group was scattered over the workers (and module fixtures such as the Ray
     cluster built on each). Carry the name over to the id pytest reads; older pytest reads
     ``_nodeid`` itself."""
+    items.sort(key=lambda item: item.path.name not in LONG_TESTS_FIRST)
     try:
         from _pytest.nodeid import NodeId
     except ImportError:

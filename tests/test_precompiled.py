@@ -25,10 +25,10 @@ from_wheel = pytest.mark.skipif(
     _editable(), reason="quadnav is installed in editable mode: its build compiles no "
                         "kernels (numba caches them beside the sources on the first run)")
 
-#: Kernels of each stage the main job runs: the planner, the controller, the loop; and the
-#: step every plain-Python controller flies by.
+#: Kernels of each stage the main job runs: the planner, the controller, the loop; the
+#: step every plain-Python controller flies by; and the free volume of ``map info``.
 MAIN_KERNELS = ("rrtstar_kernel.grow", "refine_kernel.smoothing_sweeps", "cascade.control",
-                "se3.se3_step", "loop.fly_steps", "held.held_step")
+                "se3.se3_step", "loop.fly_steps", "held.held_step", "volume._measure")
 
 
 def _cache_lines(arguments: list[str], folder, cache_dir: bool = False) -> str:
