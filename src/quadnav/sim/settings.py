@@ -49,8 +49,6 @@ class SimSettings:
         attitude_noise: rad (a random small rotation per axis).
         gyro_noise: rad/s.
         seed: seed of the gusts and the noise; the same seed flies the same flight.
-        wind_model: a plain-Python wind (a plug-in spec, its text) beside ``wind``; None:
-            none.
     """
 
     physics_rate: float = 1000.0
@@ -69,7 +67,6 @@ class SimSettings:
     attitude_noise: float = 0.0
     gyro_noise: float = 0.0
     seed: int = 0
-    wind_model: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "wind", frozen_vector(self.wind, 3))
