@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from hypothesis import settings
+from installed import main_kernels_installed
 
 # Property tests draw the same examples on every run, so a CI result can be reproduced.
 settings.register_profile("quadnav", derandomize=True, database=None)
@@ -45,11 +46,13 @@ def pytest_configure(config: pytest.Config) -> None:
     kernels for its first tests at the same time (about 40 s of CPU each). Compiled here
     once, in two processes side by side, the workers load them from the cache instead. A
     warm cache makes this a few seconds of loading. It is a speed-up only: a failure here
-    is ignored, and the tests that need the kernels compile them themselves."""
+    is ignored, and the tests that need the kernels compile them themselves. A package
+    installed from a wheel that carries them compiled (``pip install .``: setup.py) needs
+    none of it."""
     if hasattr(config, "workerinput"):
         _one_numba_thread()
         return
-    if not config.getoption("numprocesses", None):
+    if not config.getoption("numprocesses", None) or main_kernels_installed():
         return
     with tempfile.TemporaryDirectory() as tmp:
         chains = [threading.Thread(target=_run_chain, args=(chain, tmp)) for chain in WARM_UP]

@@ -7,28 +7,16 @@ compiles nothing at install time."""
 
 from __future__ import annotations
 
-import json
 import os
 import subprocess
 import sys
-from importlib import metadata
 
 import pytest
-
-
-def _editable() -> bool:
-    direct_url = metadata.distribution("quadnav").read_text("direct_url.json")
-    return bool(direct_url and json.loads(direct_url).get("dir_info", {}).get("editable"))
-
+from installed import MAIN_KERNELS, editable, wheel_kernels
 
 from_wheel = pytest.mark.skipif(
-    _editable(), reason="quadnav is installed in editable mode: its build compiles no "
+    editable(), reason="quadnav is installed in editable mode: its build compiles no "
                         "kernels (numba caches them beside the sources on the first run)")
-
-#: Kernels of each stage the main job runs: the planner, the controller, the loop; the
-#: step every plain-Python controller flies by; and the free volume of ``map info``.
-MAIN_KERNELS = ("rrtstar_kernel.grow", "refine_kernel.smoothing_sweeps", "cascade.control",
-                "se3.se3_step", "loop.fly_steps", "held.held_step", "volume._measure")
 
 
 def _cache_lines(arguments: list[str], folder, cache_dir: bool = False) -> str:
@@ -45,13 +33,10 @@ def _cache_lines(arguments: list[str], folder, cache_dir: bool = False) -> str:
 
 @from_wheel
 def test_the_wheel_carries_the_main_kernels_compiled():
-    installed = [str(path) for path in metadata.files("quadnav")]
     for kernel in MAIN_KERNELS:
-        index = [path for path in installed
-                 if f"__pycache__/{kernel}-" in path and path.endswith(".nbi")]
-        data = [path for path in installed
-                if f"__pycache__/{kernel}-" in path and path.endswith(".nbc")]
-        assert index and data, f"{kernel} was not compiled into the wheel"
+        files = wheel_kernels(kernel)
+        assert [path for path in files if path.endswith(".nbi")], kernel
+        assert [path for path in files if path.endswith(".nbc")], kernel
 
 
 @from_wheel
