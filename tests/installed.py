@@ -9,9 +9,11 @@ import os
 from importlib import metadata
 
 #: Kernels of each stage the main job runs: the planner, the controller, the loop; the
-#: step every plain-Python controller flies by; and the free volume of ``map info``.
+#: step every plain-Python controller flies by; the free volume of ``map info``, exact and
+#: estimated; and the first contact along a segment (a path's fault, a collision).
 MAIN_KERNELS = ("rrtstar_kernel.grow", "refine_kernel.smoothing_sweeps", "cascade.control",
-                "se3.se3_step", "loop.fly_steps", "held.held_step", "volume._measure")
+                "se3.se3_step", "loop.fly_steps", "held.held_step", "volume._measure",
+                "blockgrid.grid_points_free", "geometry.first_hits")
 
 
 def editable() -> bool:

@@ -9,14 +9,15 @@ installed package loads. Where a key differs (an older numba, a wheel built on a
 machine, ``NUMBA_CACHE_DIR`` set), nothing breaks: the first run compiles as before.
 
 ``python -m quadnav.cli.precompile`` runs, quietly in a scratch folder, ``quadnav plan``
-and then ``quadnav map info`` on the default world beside ``quadnav track hover`` with
-each controller (each has a step of its own and a compiled loop of its own for its type
-of gains) and then with a plain-Python controller (:class:`Follow`: every plain-Python
-controller flies by one compiled step, :func:`quadnav.control.held.held_step`, in the
-cascade's loop), two chains of processes side by side so that two cores compile at
-once; then ``quadnav fly --no-figures``, which loads
-what they compiled and compiles the rest. It exits 1, with the failing command's last
-lines on stderr, if a command fails.
+and then ``quadnav map info`` on the default world (and, in this process, the exact
+checks reached only when something is in the way: :func:`compile_checks_in_the_way`)
+beside ``quadnav track hover`` with each controller (each has a step of its own and a
+compiled loop of its own for its type of gains) and then with a plain-Python controller
+(:class:`Follow`: every plain-Python controller flies by one compiled step,
+:func:`quadnav.control.held.held_step`, in the cascade's loop), two chains side by side
+so that two cores compile at once; then ``quadnav fly --no-figures``, which loads what
+they compiled and compiles the rest. It exits 1, with the failing command's last lines
+on stderr, if a command fails.
 """
 
 from __future__ import annotations
@@ -95,12 +96,29 @@ def run_in_sequence(commands: Sequence[Sequence[str]], folder: Path) -> bool:
     return all([finish(start(command, folder)) for command in commands])
 
 
+def compile_checks_in_the_way() -> bool:
+    """Compile, in this process, the exact checks the commands reach only when something
+    is in the way or too large: the first contact along a segment (a path's fault, a
+    collision, a leg's end: :meth:`~quadnav.world.World.first_hit`), the free volume
+    estimated over points (a map too costly to measure exactly), and a point's check as
+    OMPL's planners ask it; True."""
+    from quadnav.world import load_world
+    from quadnav.world.blockgrid import grid_point_free
+
+    world = load_world(DEFAULT_WORLD_SPEC)
+    world.first_hit(world.lower, world.upper)
+    world.free_volume(budget=0)
+    grid_point_free(*world.lower, world.block_grid)
+    return True
+
+
 def main() -> int:
     """Compile the kernels; exit code 0, or 1 if a command failed."""
     with tempfile.TemporaryDirectory(prefix="quadnav-precompile-") as scratch:
         folder = Path(scratch)
         with ThreadPoolExecutor(max_workers=2) as chains:
-            planning = chains.submit(run_in_sequence, [PLAN, INFO], folder)
+            planning = chains.submit(
+                lambda: run_in_sequence([PLAN, INFO], folder) and compile_checks_in_the_way())
             flying = run_in_sequence([*(track(name) for name in CONTROLLERS), PLAIN], folder)
             planned = planning.result()
         return 0 if planned and flying and finish(start(FLY, folder)) else 1
