@@ -22,21 +22,21 @@ def editable() -> bool:
     return bool(direct_url and json.loads(direct_url).get("dir_info", {}).get("editable"))
 
 
-def wheel_kernels(kernel: str) -> list[str]:
-    """The files of numba's cache of ``kernel`` (``module.function``, as numba names its
-    files) that the installed package carries: index (.nbi) and data (.nbc) files."""
-    return [str(path) for path in metadata.files("quadnav") or []
-            if f"__pycache__/{kernel}-" in str(path) and str(path).endswith((".nbi", ".nbc"))]
+def carried(kernel: str) -> bool:
+    """Whether the installed package carries numba's cache of ``kernel``
+    (``module.function``, as numba names its files): an index (.nbi) and a data (.nbc)
+    file."""
+    files = [str(path) for path in metadata.files("quadnav") or []
+             if f"__pycache__/{kernel}-" in str(path)]
+    return any(path.endswith(".nbi") for path in files) and any(
+        path.endswith(".nbc") for path in files)
 
 
 def main_kernels_installed() -> bool:
     """Whether quadnav was installed from a wheel that carries every kernel of
-    :data:`MAIN_KERNELS` compiled (index and data) where numba looks for them: for this
-    CPU, in the cache beside the package (not with ``NUMBA_CPU_NAME`` or
-    ``NUMBA_CACHE_DIR`` set, as for the CI's run on a generic CPU)."""
+    :data:`MAIN_KERNELS` compiled where numba looks for them: for this CPU, in the cache
+    beside the package (not with ``NUMBA_CPU_NAME`` or ``NUMBA_CACHE_DIR`` set, as for the
+    CI's run on a generic CPU)."""
     if os.environ.get("NUMBA_CPU_NAME") or os.environ.get("NUMBA_CACHE_DIR"):
         return False
-    return not editable() and all(
-        any(path.endswith(".nbi") for path in files) and any(path.endswith(".nbc")
-                                                             for path in files)
-        for files in map(wheel_kernels, MAIN_KERNELS))
+    return not editable() and all(map(carried, MAIN_KERNELS))

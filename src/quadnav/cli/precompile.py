@@ -96,12 +96,12 @@ def run_in_sequence(commands: Sequence[Sequence[str]], folder: Path) -> bool:
     return all([finish(start(command, folder)) for command in commands])
 
 
-def compile_checks_in_the_way() -> bool:
+def compile_checks_in_the_way() -> None:
     """Compile, in this process, the exact checks the commands reach only when something
     is in the way or too large: the first contact along a segment (a path's fault, a
     collision, a leg's end: :meth:`~quadnav.world.World.first_hit`), the free volume
     estimated over points (a map too costly to measure exactly), and a point's check as
-    OMPL's planners ask it; True."""
+    OMPL's planners ask it."""
     from quadnav.world import load_world
     from quadnav.world.blockgrid import grid_point_free
 
@@ -109,7 +109,14 @@ def compile_checks_in_the_way() -> bool:
     world.first_hit(world.lower, world.upper)
     world.free_volume(budget=0)
     grid_point_free(*world.lower, world.block_grid)
-    return True
+
+
+def planning_chain(folder: Path) -> bool:
+    """:data:`PLAN` and :data:`INFO` in ``folder`` one after the other, then
+    :func:`compile_checks_in_the_way`; True if both commands ran."""
+    ran = run_in_sequence([PLAN, INFO], folder)
+    compile_checks_in_the_way()
+    return ran
 
 
 def main() -> int:
@@ -117,8 +124,7 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="quadnav-precompile-") as scratch:
         folder = Path(scratch)
         with ThreadPoolExecutor(max_workers=2) as chains:
-            planning = chains.submit(
-                lambda: run_in_sequence([PLAN, INFO], folder) and compile_checks_in_the_way())
+            planning = chains.submit(planning_chain, folder)
             flying = run_in_sequence([*(track(name) for name in CONTROLLERS), PLAIN], folder)
             planned = planning.result()
         return 0 if planned and flying and finish(start(FLY, folder)) else 1
