@@ -32,7 +32,7 @@ from quadnav.world import World, load_world
 CUBE = np.array([0.0, 0.0, 0.0, 100.0, 100.0, 100.0])
 
 
-@njit  # not cached: the tests load this file under another module name
+@njit(cache=True)
 def _union_length(starts, ends) -> float:
     """Total length of the union of intervals [starts[i], ends[i]]."""
     order = np.argsort(starts)
@@ -51,7 +51,7 @@ def _union_length(starts, ends) -> float:
     return total
 
 
-@njit  # not cached: the tests load this file under another module name
+@njit(cache=True)
 def _union_area_yz(boxes, active):
     """Area of the union of the (y, z) rectangles of boxes[active]."""
     ys = np.unique(np.concatenate((boxes[active, 1], boxes[active, 4])))
@@ -64,7 +64,7 @@ def _union_area_yz(boxes, active):
     return area
 
 
-@njit  # not cached: the tests load this file under another module name
+@njit(cache=True)
 def sweep_volume(boxes) -> float:
     """Baseline: volume of the union of boxes (N, 6), m^3, by the former sweep.
 
